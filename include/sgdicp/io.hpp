@@ -1,0 +1,56 @@
+#pragma once
+// Reading and writing point-cloud files.
+//
+// Read: PCD (ascii, binary, binary_compressed), PLY (ascii, binary little/big endian),
+// KITTI .bin (float32 x y z intensity), text x y z (.xyz, .txt, .csv; a header line is
+// allowed), legacy ASCII VTK POLYDATA, and headerless float32 x y z (.f32).
+// Written: PLY, PCD and XYZ.
+//
+// Readers are strict and bounds-checked: a truncated or malformed file raises FormatError whose
+// message names the file and where it broke (line number for text, byte offset for binary).
+// Points with a non-finite coordinate are dropped and counted, never returned.
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+#include "sgdicp/point_cloud.hpp"
+
+namespace sgdicp {
+
+enum class FileFormat {
+  automatic,  ///< from the file extension (.pcd .ply .bin .xyz .txt .csv .vtk .f32)
+  pcd,
+  ply,
+  kitti_bin,  ///< float32 little-endian x y z intensity, 16 bytes per point
+  xyz,        ///< text, one point per line, separated by spaces, tabs, commas or semicolons
+  vtk,        ///< legacy ASCII VTK POLYDATA (POINTS n float|double)
+  f32,        ///< headerless float32 little-endian x y z, 12 bytes per point
+};
+
+/// Short lowercase name of a format ("pcd", "ply", ...).
+[[nodiscard]] std::string to_string(FileFormat format);
+
+/// The format implied by a path's extension; throws FormatError when it is not known.
+[[nodiscard]] FileFormat format_from_extension(const std::filesystem::path& path);
+
+struct ReadResult {
+  PointCloud cloud;                   ///< the finite points, in file order
+  std::size_t points_in_file = 0;     ///< points the file declares / contains
+  std::size_t non_finite_dropped = 0; ///< points dropped for a NaN or infinite coordinate
+  FileFormat format = FileFormat::automatic;  ///< the format that was read
+};
+
+/// Reads the x y z of every point of a file. Throws IoError (cannot open/read) or FormatError.
+[[nodiscard]] ReadResult read_point_cloud(const std::filesystem::path& path,
+                                          FileFormat format = FileFormat::automatic);
+
+/// Encoding of the written file (ignored for XYZ, which is always text).
+enum class Encoding { binary, ascii };
+
+/// Writes x y z of every point as PLY, PCD or XYZ (chosen from the extension unless given).
+/// Binary PLY is little endian, binary PCD is uncompressed "binary". Throws IoError.
+void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud,
+                       FileFormat format = FileFormat::automatic,
+                       Encoding encoding = Encoding::binary);
+
+}  // namespace sgdicp

@@ -1,0 +1,35 @@
+#pragma once
+// The point cloud type used throughout: metric x y z, single precision (as sensors deliver it).
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace sgdicp {
+
+/// A set of 3D points in one frame, in metres. Float storage halves memory and cache traffic;
+/// all accumulations of the method are done in double.
+struct PointCloud {
+  std::vector<Eigen::Vector3f> points;
+
+  [[nodiscard]] std::size_t size() const noexcept { return points.size(); }
+  [[nodiscard]] bool empty() const noexcept { return points.empty(); }
+};
+
+/// Axis-aligned bounding box of a cloud. Undefined (min > max) for an empty cloud.
+struct BoundingBox {
+  Eigen::Vector3d min{Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity())};
+  Eigen::Vector3d max{Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity())};
+
+  void extend(const Eigen::Vector3d& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
+  void extend(const PointCloud& cloud) {
+    for (const auto& p : cloud.points) extend(p.cast<double>());
+  }
+  [[nodiscard]] bool valid() const { return (min.array() <= max.array()).all(); }
+};
+
+}  // namespace sgdicp
