@@ -1,0 +1,174 @@
+#pragma once
+// Options shared by `sgdicp register` and `sgdicp bench`: every setting of SgdSettings, with its
+// unit and default (taken from the library, so help and behaviour never disagree).
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "sgdicp/registration.hpp"
+
+namespace sgdicp::cli {
+
+struct SettingsOptions {
+  std::string preset = "default";
+  std::optional<std::string> optimizer;
+  std::optional<double> learning_rate;
+  std::optional<std::size_t> batch_size;
+  std::optional<double> max_distance;
+  std::string max_distance_unit = "scaled";
+  std::optional<std::size_t> max_iterations;
+  std::optional<std::uint64_t> seed;
+  std::optional<double> momentum, beta1, beta2, rms_decay, epsilon;
+  std::optional<std::size_t> window, patience;
+  std::optional<double> translation_tolerance, rotation_tolerance;
+  std::optional<std::size_t> refine_stages;
+  std::optional<double> step_decay, distance_factor, min_distance;
+  std::optional<bool> average;
+  std::optional<std::size_t> evaluation_points;
+  std::optional<std::string> scaling_origin;
+};
+
+inline std::string num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
+  const SgdSettings d{};
+  const SgdSettings p = SgdSettings::paper();
+  const SgdSettings pa = SgdSettings::paper(OptimizerType::adam);
+  const auto both = [](const std::string& def, const std::string& paper) {
+    return " [default: " + def + "; paper preset: " + paper + "]";
+  };
+  app.add_option("--preset", o.preset,
+                 "Base settings that the options below override: 'default' (the best measured: "
+                 "paper coarse phase, then refinement) or 'paper' (m = 160, d_max = 0.5 scaled, "
+                 "fixed step 2 or Adam, no refinement, last iterate returned) [default: default]")
+      ->check(CLI::IsMember({"default", "paper"}));
+  app.add_option("--optimizer", o.optimizer,
+                 "Step rule of eq. 3: sgd (fixed step), momentum, rmsprop, adam" +
+                     both(std::string(to_string(d.optimizer.type)), "sgd"))
+      ->check(CLI::IsMember({"sgd", "momentum", "rmsprop", "adam"}));
+  app.add_option("--learning-rate", o.learning_rate,
+                 "Step size alpha, in scaled units (the clouds are scaled into [0, 1])" +
+                     both(num(d.optimizer.learning_rate) + " for sgd",
+                          num(p.optimizer.learning_rate) + " for sgd, " +
+                              num(pa.optimizer.learning_rate) + " for adam"));
+  app.add_option("--batch-size,-m", o.batch_size,
+                 "Mini-batch size m, source points per iteration" +
+                     both(std::to_string(d.batch_size), std::to_string(p.batch_size)));
+  app.add_option("--max-distance,-d", o.max_distance,
+                 "Correspondence rejection distance d_max, in the unit of --max-distance-unit" +
+                     both(num(d.max_correspondence_distance.value) + " scaled",
+                          num(p.max_correspondence_distance.value) + " scaled"));
+  app.add_option("--max-distance-unit", o.max_distance_unit,
+                 "Unit of --max-distance and --min-distance: 'scaled' (fraction of the largest "
+                 "side of the joint bounding box) or 'm' (metres) [default: scaled]")
+      ->check(CLI::IsMember({"scaled", "m"}));
+  app.add_option("--max-iterations", o.max_iterations,
+                 "Iteration (mini-batch) limit; reaching it reports 'not converged'" +
+                     both(std::to_string(d.max_iterations), std::to_string(p.max_iterations)));
+  app.add_option("--seed", o.seed,
+                 "Seed of the mini-batch sampler (same seed, same result)" +
+                     both(std::to_string(d.seed), std::to_string(p.seed)));
+  app.add_option("--momentum", o.momentum,
+                 "Momentum: velocity decay, unitless in [0, 1)" + both(num(d.optimizer.momentum), num(p.optimizer.momentum)));
+  app.add_option("--beta1", o.beta1, "Adam: decay of the gradient mean, in [0, 1)" +
+                                         both(num(d.optimizer.beta1), num(p.optimizer.beta1)));
+  app.add_option("--beta2", o.beta2, "Adam: decay of the squared-gradient mean, in [0, 1)" +
+                                         both(num(d.optimizer.beta2), num(p.optimizer.beta2)));
+  app.add_option("--rms-decay", o.rms_decay,
+                 "RMSProp: decay of the squared-gradient mean, in [0, 1)" +
+                     both(num(d.optimizer.rms_decay), num(p.optimizer.rms_decay)));
+  app.add_option("--epsilon", o.epsilon, "Adam/RMSProp: added to the gradient RMS, scaled units" +
+                                             both(num(d.optimizer.epsilon), num(p.optimizer.epsilon)));
+  app.add_option("--window", o.window,
+                 "Convergence: iterations per averaging window" +
+                     both(std::to_string(d.convergence.window), std::to_string(p.convergence.window)));
+  app.add_option("--translation-tolerance", o.translation_tolerance,
+                 "Convergence: max change of the window-mean translation, scaled units" +
+                     both(num(d.convergence.translation_tolerance),
+                          num(p.convergence.translation_tolerance)));
+  app.add_option("--rotation-tolerance", o.rotation_tolerance,
+                 "Convergence: max change of the window-mean angles (sum of |d roll|, |d pitch|, "
+                 "|d yaw|), rad" +
+                     both(num(d.convergence.rotation_tolerance), num(p.convergence.rotation_tolerance)));
+  app.add_option("--patience", o.patience,
+                 "Convergence: quiet windows in a row that end a stage" +
+                     both(std::to_string(d.convergence.patience), std::to_string(p.convergence.patience)));
+  app.add_option("--refine-stages", o.refine_stages,
+                 "Refinement stages after the first convergence (0 = the paper's single phase)" +
+                     both(std::to_string(d.refinement.stages), std::to_string(p.refinement.stages)));
+  app.add_option("--step-decay", o.step_decay,
+                 "Refinement: step-size multiplier per stage, in (0, 1]" +
+                     both(num(d.refinement.step_decay), num(p.refinement.step_decay)));
+  app.add_option("--distance-factor", o.distance_factor,
+                 "Refinement: new d_max = factor x median correspondence distance, unitless" +
+                     both(num(d.refinement.distance_factor), num(p.refinement.distance_factor)));
+  app.add_option("--min-distance", o.min_distance,
+                 "Refinement: lower bound of d_max, in the unit of --max-distance-unit" +
+                     both(num(d.refinement.min_distance.value) + " scaled",
+                          num(p.refinement.min_distance.value) + " scaled"));
+  app.add_option("--average", o.average,
+                 "Return the mean pose of the last convergence window (true) or the last iterate "
+                 "(false)" +
+                     both(d.average_last_window ? "true" : "false",
+                          p.average_last_window ? "true" : "false"));
+  app.add_option("--scaling-origin", o.scaling_origin,
+                 "Origin of the scaled space and pivot of the rotation: 'corner' (the paper, points "
+                 "in [0, 1]) or 'center' (points in [-0.5, 0.5])" +
+                     both(d.scaling_origin == ScalingOrigin::center ? "center" : "corner",
+                          p.scaling_origin == ScalingOrigin::center ? "center" : "corner"))
+      ->check(CLI::IsMember({"corner", "center"}));
+  app.add_option("--evaluation-points", o.evaluation_points,
+                 "Source points (evenly strided) used for the final inlier ratio and RMSE, 0 = all" +
+                     both(std::to_string(d.evaluation_points), std::to_string(p.evaluation_points)));
+}
+
+/// The settings of the chosen preset with every given option applied. Throws InvalidSettingsError.
+inline SgdSettings make_settings(const SettingsOptions& o) {
+  const std::optional<OptimizerType> type =
+      o.optimizer ? std::optional(optimizer_from_string(*o.optimizer)) : std::nullopt;
+  SgdSettings s = o.preset == "paper" ? SgdSettings::paper(type.value_or(OptimizerType::sgd))
+                                      : SgdSettings{};
+  if (type && o.preset != "paper") {
+    s.optimizer.type = *type;
+    // Adaptive optimisers take a length per step, not a gradient multiplier.
+    if (*type != OptimizerType::sgd && *type != OptimizerType::momentum) {
+      s.optimizer.learning_rate = SgdSettings::paper(OptimizerType::adam).optimizer.learning_rate;
+    } else if (*type == OptimizerType::momentum) {
+      s.optimizer.learning_rate *= 1.0 - s.optimizer.momentum;
+    }
+  }
+  const auto unit = o.max_distance_unit == "m" ? Distance::Unit::metres : Distance::Unit::scaled;
+  if (o.learning_rate) s.optimizer.learning_rate = *o.learning_rate;
+  if (o.batch_size) s.batch_size = *o.batch_size;
+  if (o.max_distance) s.max_correspondence_distance = {*o.max_distance, unit};
+  if (o.max_iterations) s.max_iterations = *o.max_iterations;
+  if (o.seed) s.seed = *o.seed;
+  if (o.momentum) s.optimizer.momentum = *o.momentum;
+  if (o.beta1) s.optimizer.beta1 = *o.beta1;
+  if (o.beta2) s.optimizer.beta2 = *o.beta2;
+  if (o.rms_decay) s.optimizer.rms_decay = *o.rms_decay;
+  if (o.epsilon) s.optimizer.epsilon = *o.epsilon;
+  if (o.window) s.convergence.window = *o.window;
+  if (o.patience) s.convergence.patience = *o.patience;
+  if (o.translation_tolerance) s.convergence.translation_tolerance = *o.translation_tolerance;
+  if (o.rotation_tolerance) s.convergence.rotation_tolerance = *o.rotation_tolerance;
+  if (o.refine_stages) s.refinement.stages = *o.refine_stages;
+  if (o.step_decay) s.refinement.step_decay = *o.step_decay;
+  if (o.distance_factor) s.refinement.distance_factor = *o.distance_factor;
+  if (o.min_distance) s.refinement.min_distance = {*o.min_distance, unit};
+  if (o.average) s.average_last_window = *o.average;
+  if (o.evaluation_points) s.evaluation_points = *o.evaluation_points;
+  if (o.scaling_origin) {
+    s.scaling_origin = *o.scaling_origin == "corner" ? ScalingOrigin::lower_corner : ScalingOrigin::center;
+  }
+  s.validate();
+  return s;
+}
+
+}  // namespace sgdicp::cli

@@ -1,0 +1,29 @@
+// sgdicp: command-line registration of point clouds with SGD-ICP.
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "cli_common.hpp"
+#include "sgdicp/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "sgdicp: register 3D point clouds with SGD-ICP (ICP solved by stochastic gradient descent "
+      "on mini-batches; Maken, Ramos, Ott, ICRA 2019)."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "sgdicp 0.1.0");
+  sgdicp::cli::add_register_command(app);
+  sgdicp::cli::add_bench_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const sgdicp::Error& e) {
+    std::cerr << "sgdicp: error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "sgdicp: unexpected error: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,52 @@
+#pragma once
+// The nearest-neighbour structure over the reference cloud (paper eq. 8). Built once per
+// reference and reused by any number of registrations, also from several threads at once:
+// every query method is const and touches no shared mutable state.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+
+#include <Eigen/Core>
+
+#include "sgdicp/point_cloud.hpp"
+
+namespace sgdicp {
+
+struct Neighbor {
+  std::uint32_t index = 0;        ///< index into the reference cloud
+  float squared_distance = 0.0F;  ///< metres^2
+};
+
+struct KdTreeSettings {
+  /// Points per leaf. Small leaves favour single-nearest queries; 10 is nanoflann's default.
+  std::size_t leaf_size = 10;
+};
+
+/// A KD-tree (nanoflann) over a reference cloud it owns. Non-copyable, cheap to move.
+class ReferenceIndex {
+ public:
+  /// Builds the tree. Throws InvalidInputError for an empty cloud or a non-finite point.
+  explicit ReferenceIndex(PointCloud reference, const KdTreeSettings& settings = {});
+  ~ReferenceIndex();
+  ReferenceIndex(ReferenceIndex&&) noexcept;
+  ReferenceIndex& operator=(ReferenceIndex&&) noexcept;
+  ReferenceIndex(const ReferenceIndex&) = delete;
+  ReferenceIndex& operator=(const ReferenceIndex&) = delete;
+
+  [[nodiscard]] const PointCloud& cloud() const noexcept;
+  [[nodiscard]] const BoundingBox& bounding_box() const noexcept;
+  [[nodiscard]] std::size_t size() const noexcept { return cloud().size(); }
+
+  /// The nearest reference point to query, if one lies within sqrt(max_squared_distance).
+  /// Bounding the search prunes the tree early, so rejected queries are cheap.
+  [[nodiscard]] std::optional<Neighbor> nearest(
+      const Eigen::Vector3f& query,
+      float max_squared_distance = std::numeric_limits<float>::max()) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sgdicp

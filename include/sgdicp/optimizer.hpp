@@ -1,0 +1,105 @@
+#pragma once
+// First-order optimisers for the update of paper eq. 3, theta_t = theta_{t-1} - alpha A g, with
+// A = identity: fixed step ("vanilla SGD", the paper's alpha = 2), heavy-ball momentum, RMSProp
+// and Adam (Kingma and Ba 2015, the paper's "Adam-SGD").
+#include <cmath>
+#include <string>
+#include <string_view>
+
+#include "sgdicp/error.hpp"
+#include "sgdicp/pose.hpp"
+
+namespace sgdicp {
+
+enum class OptimizerType { sgd, momentum, rmsprop, adam };
+
+[[nodiscard]] inline std::string_view to_string(OptimizerType t) {
+  switch (t) {
+    case OptimizerType::sgd: return "sgd";
+    case OptimizerType::momentum: return "momentum";
+    case OptimizerType::rmsprop: return "rmsprop";
+    case OptimizerType::adam: return "adam";
+  }
+  return "?";
+}
+
+/// Parses "sgd", "momentum", "rmsprop" or "adam"; throws InvalidSettingsError otherwise.
+[[nodiscard]] inline OptimizerType optimizer_from_string(std::string_view name) {
+  for (const auto t : {OptimizerType::sgd, OptimizerType::momentum, OptimizerType::rmsprop,
+                       OptimizerType::adam}) {
+    if (name == to_string(t)) return t;
+  }
+  throw InvalidSettingsError("unknown optimizer '" + std::string(name) +
+                             "' (expected sgd, momentum, rmsprop or adam)");
+}
+
+struct OptimizerSettings {
+  OptimizerType type = OptimizerType::sgd;
+  /// alpha of eq. 3, in scaled units per unit gradient. The paper uses 2 with a fixed step.
+  double learning_rate = 2.0;
+  double momentum = 0.9;       ///< momentum: velocity decay (heavy ball)
+  double beta1 = 0.9;          ///< Adam: decay of the mean of gradients
+  double beta2 = 0.999;        ///< Adam: decay of the mean of squared gradients
+  double rms_decay = 0.9;      ///< RMSProp: decay of the mean of squared gradients
+  double epsilon = 1e-8;       ///< Adam/RMSProp: added to the root mean square
+
+  void validate() const {
+    const auto in_unit = [](double v) { return v >= 0.0 && v < 1.0; };
+    if (!(learning_rate > 0.0) || !std::isfinite(learning_rate)) {
+      throw InvalidSettingsError("learning rate must be positive and finite");
+    }
+    if (!in_unit(momentum) || !in_unit(beta1) || !in_unit(beta2) || !in_unit(rms_decay)) {
+      throw InvalidSettingsError("momentum, beta1, beta2 and rms-decay must be in [0, 1)");
+    }
+    if (!(epsilon > 0.0) || !std::isfinite(epsilon)) {
+      throw InvalidSettingsError("epsilon must be positive and finite");
+    }
+  }
+};
+
+/// The state of one optimiser run. step() returns the increment to add to theta.
+class Optimizer {
+ public:
+  explicit Optimizer(const OptimizerSettings& settings) : settings_(settings) {
+    settings_.validate();
+  }
+
+  /// The increment -alpha * A(g) * g for gradient g, with learning-rate multiplier lr_scale
+  /// (used by step-size decay schedules).
+  [[nodiscard]] PoseVector step(const PoseVector& g, double lr_scale = 1.0) {
+    const double alpha = settings_.learning_rate * lr_scale;
+    ++t_;
+    switch (settings_.type) {
+      case OptimizerType::sgd:
+        return -alpha * g;
+      case OptimizerType::momentum:
+        velocity_ = settings_.momentum * velocity_ + g;
+        return -alpha * velocity_;
+      case OptimizerType::rmsprop:
+        second_ = settings_.rms_decay * second_ +
+                  (1.0 - settings_.rms_decay) * g.cwiseProduct(g);
+        return -alpha * g.cwiseQuotient((second_.cwiseSqrt().array() + settings_.epsilon).matrix());
+      case OptimizerType::adam: {
+        first_ = settings_.beta1 * first_ + (1.0 - settings_.beta1) * g;
+        second_ = settings_.beta2 * second_ + (1.0 - settings_.beta2) * g.cwiseProduct(g);
+        const double c1 = 1.0 - std::pow(settings_.beta1, static_cast<double>(t_));
+        const double c2 = 1.0 - std::pow(settings_.beta2, static_cast<double>(t_));
+        const PoseVector m_hat = first_ / c1;
+        const PoseVector v_hat = second_ / c2;
+        return -alpha * m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + settings_.epsilon).matrix());
+      }
+    }
+    return PoseVector::Zero();
+  }
+
+  [[nodiscard]] const OptimizerSettings& settings() const noexcept { return settings_; }
+
+ private:
+  OptimizerSettings settings_;
+  PoseVector first_ = PoseVector::Zero();
+  PoseVector second_ = PoseVector::Zero();
+  PoseVector velocity_ = PoseVector::Zero();
+  long t_ = 0;
+};
+
+}  // namespace sgdicp

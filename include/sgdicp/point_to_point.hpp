@@ -1,0 +1,54 @@
+#pragma once
+// The point-to-point cost of the paper and its analytic gradient w.r.t. theta (eq. 5-7, Alg. 1
+// lines 9-10). For a pair (s, r) the residual is e = R s + t - r. The paper's update direction
+// is g = 1/(2m) * sum_i J_i^T e_i with J = [I | dR/droll s, dR/dpitch s, dR/dyaw s]; it is the
+// exact gradient of F(theta) = 1/(4m) * sum_i ||e_i||^2. With this normalisation a fixed step
+// alpha = 2 is a unit Newton step in translation, which is why the paper's alpha = 2 works.
+#include <array>
+
+#include <Eigen/Core>
+
+#include "sgdicp/pose.hpp"
+
+namespace sgdicp {
+
+/// Accumulates sum_i J_i^T e_i and sum_i ||e_i||^2 for one mini-batch at a fixed pose.
+class PointToPointGradient {
+ public:
+  explicit PointToPointGradient(const PoseVector& theta)
+      : rotation_(rotation_from_rpy(theta[3], theta[4], theta[5])),
+        translation_(theta.head<3>()),
+        d_rotation_(rotation_derivatives(theta[3], theta[4], theta[5])) {}
+
+  /// The source point moved by the current pose.
+  [[nodiscard]] Eigen::Vector3d transform(const Eigen::Vector3d& s) const {
+    return rotation_ * s + translation_;
+  }
+
+  /// Adds the pair (s, r), where moved = transform(s).
+  void add(const Eigen::Vector3d& s, const Eigen::Vector3d& moved, const Eigen::Vector3d& r) {
+    const Eigen::Vector3d e = moved - r;
+    jte_.head<3>() += e;
+    for (int k = 0; k < 3; ++k) jte_[3 + k] += (d_rotation_[k] * s).dot(e);
+    squared_error_ += e.squaredNorm();
+  }
+
+  /// g = 1/(2m) sum J^T e, the gradient of F = 1/(4m) sum ||e||^2.
+  [[nodiscard]] PoseVector gradient(std::size_t batch_size) const {
+    return jte_ / (2.0 * static_cast<double>(batch_size));
+  }
+  /// F = 1/(4m) sum ||e||^2.
+  [[nodiscard]] double cost(std::size_t batch_size) const {
+    return squared_error_ / (4.0 * static_cast<double>(batch_size));
+  }
+  [[nodiscard]] double sum_squared_error() const noexcept { return squared_error_; }
+
+ private:
+  Eigen::Matrix3d rotation_;
+  Eigen::Vector3d translation_;
+  std::array<Eigen::Matrix3d, 3> d_rotation_;
+  PoseVector jte_ = PoseVector::Zero();
+  double squared_error_ = 0.0;
+};
+
+}  // namespace sgdicp

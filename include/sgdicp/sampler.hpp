@@ -1,0 +1,61 @@
+#pragma once
+// Mini-batch sampling without replacement (paper Section III-B, Algorithm 1 line 2): source
+// indices are drawn from a shuffled order; when every point has been used, the order is
+// reshuffled and a new epoch starts. A batch may straddle two epochs. Seeded and reproducible:
+// the shuffle and the bounded draws are our own, so the sequence does not depend on the standard
+// library's distribution implementations.
+#include <cstdint>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "sgdicp/error.hpp"
+
+namespace sgdicp {
+
+class EpochSampler {
+ public:
+  EpochSampler(std::uint32_t num_points, std::uint64_t seed) : order_(num_points), rng_(seed) {
+    if (num_points == 0) throw InvalidInputError("cannot sample from an empty cloud");
+    std::iota(order_.begin(), order_.end(), 0U);
+    shuffle();
+  }
+
+  /// Fills batch with the next batch_size indices (cleared first).
+  void next_batch(std::size_t batch_size, std::vector<std::uint32_t>& batch) {
+    batch.clear();
+    for (std::size_t i = 0; i < batch_size; ++i) {
+      if (cursor_ == order_.size()) {
+        shuffle();
+        cursor_ = 0;
+        ++epoch_;
+      }
+      batch.push_back(order_[cursor_++]);
+    }
+  }
+
+  /// Completed passes over the cloud.
+  [[nodiscard]] std::uint64_t epoch() const noexcept { return epoch_; }
+
+ private:
+  // Uniform integer in [0, bound): reject the top partial block so that the modulo is unbiased.
+  std::uint64_t bounded(std::uint64_t bound) {
+    const std::uint64_t limit = std::mt19937_64::max() - std::mt19937_64::max() % bound;
+    std::uint64_t x = rng_();
+    while (x >= limit) x = rng_();
+    return x % bound;
+  }
+  // Fisher-Yates.
+  void shuffle() {
+    for (std::size_t i = order_.size(); i > 1; --i) {
+      std::swap(order_[i - 1], order_[bounded(i)]);
+    }
+  }
+
+  std::vector<std::uint32_t> order_;
+  std::mt19937_64 rng_;
+  std::size_t cursor_ = 0;
+  std::uint64_t epoch_ = 0;
+};
+
+}  // namespace sgdicp

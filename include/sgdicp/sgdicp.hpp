@@ -1,0 +1,16 @@
+#pragma once
+// Everything of the sgdicp library in one include.
+#include "sgdicp/error.hpp"
+#include "sgdicp/io.hpp"
+#include "sgdicp/metrics.hpp"
+#include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/optimizer.hpp"
+#include "sgdicp/pairs.hpp"
+#include "sgdicp/point_cloud.hpp"
+#include "sgdicp/point_to_point.hpp"
+#include "sgdicp/pose.hpp"
+#include "sgdicp/registration.hpp"
+#include "sgdicp/render.hpp"
+#include "sgdicp/sampler.hpp"
+#include "sgdicp/scaling.hpp"
+#include "sgdicp/transform_io.hpp"
