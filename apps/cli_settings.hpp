@@ -21,7 +21,8 @@ struct SettingsOptions {
   std::optional<std::size_t> max_iterations;
   std::optional<std::uint64_t> seed;
   std::optional<double> momentum, beta1, beta2, rms_decay, epsilon;
-  std::optional<std::size_t> window, patience;
+  std::optional<std::size_t> window;
+  std::optional<double> chi2;
   std::optional<double> translation_tolerance, rotation_tolerance;
   std::optional<std::size_t> refine_stages;
   std::optional<double> step_decay, distance_factor, min_distance;
@@ -49,12 +50,13 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                  "fixed step 2 or Adam, no refinement, last iterate returned) [default: default]")
       ->check(CLI::IsMember({"default", "paper"}));
   app.add_option("--optimizer", o.optimizer,
-                 "Step rule of eq. 3: sgd (fixed step), momentum, rmsprop, adam" +
+                 "Step rule of eq. 3: sgd (fixed step), momentum, rmsprop, adam, gauss-newton (A = inverse of the averaged mini-batch Gauss-Newton matrix; learning rate 1 = full step)" +
                      both(std::string(to_string(d.optimizer.type)), "sgd"))
-      ->check(CLI::IsMember({"sgd", "momentum", "rmsprop", "adam"}));
+      ->check(CLI::IsMember({"sgd", "momentum", "rmsprop", "adam", "gauss-newton"}));
   app.add_option("--learning-rate", o.learning_rate,
                  "Step size alpha, in scaled units (the clouds are scaled into [0, 1])" +
-                     both(num(d.optimizer.learning_rate) + " for sgd",
+                     both(num(d.optimizer.learning_rate) + " for adam/rmsprop, 2 for sgd, 0.2 for "
+                              "momentum, 1 for gauss-newton",
                           num(p.optimizer.learning_rate) + " for sgd, " +
                               num(pa.optimizer.learning_rate) + " for adam"));
   app.add_option("--batch-size,-m", o.batch_size,
@@ -86,21 +88,25 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
   app.add_option("--epsilon", o.epsilon, "Adam/RMSProp: added to the gradient RMS, scaled units" +
                                              both(num(d.optimizer.epsilon), num(p.optimizer.epsilon)));
   app.add_option("--window", o.window,
-                 "Convergence: iterations per averaging window" +
+                 "Convergence: iterations per test window, >= 8 (a stage ends after a window whose "
+                 "mean mini-batch gradient is not significantly non-zero); also the length of "
+                 "the final iterate average" +
                      both(std::to_string(d.convergence.window), std::to_string(p.convergence.window)));
+  app.add_option("--chi2", o.chi2,
+                 "Convergence: critical chi-square value (6 dof) of the Hotelling test on the "
+                 "window's mean gradient; larger stops earlier" +
+                     both(num(d.convergence.chi2), num(p.convergence.chi2)));
   app.add_option("--translation-tolerance", o.translation_tolerance,
-                 "Convergence: max change of the window-mean translation, scaled units" +
+                 "Convergence: a window whose steps each move the translation less than this "
+                 "also ends a stage, scaled units" +
                      both(num(d.convergence.translation_tolerance),
                           num(p.convergence.translation_tolerance)));
   app.add_option("--rotation-tolerance", o.rotation_tolerance,
-                 "Convergence: max change of the window-mean angles (sum of |d roll|, |d pitch|, "
+                 "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
                  "|d yaw|), rad" +
                      both(num(d.convergence.rotation_tolerance), num(p.convergence.rotation_tolerance)));
-  app.add_option("--patience", o.patience,
-                 "Convergence: quiet windows in a row that end a stage" +
-                     both(std::to_string(d.convergence.patience), std::to_string(p.convergence.patience)));
   app.add_option("--refine-stages", o.refine_stages,
-                 "Refinement stages after the first convergence (0 = the paper's single phase)" +
+                 "Refinement stages after the first stationary stage (0 = the paper's single phase)" +
                      both(std::to_string(d.refinement.stages), std::to_string(p.refinement.stages)));
   app.add_option("--step-decay", o.step_decay,
                  "Refinement: step-size multiplier per stage, in (0, 1]" +
@@ -113,10 +119,9 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                      both(num(d.refinement.min_distance.value) + " scaled",
                           num(p.refinement.min_distance.value) + " scaled"));
   app.add_option("--average", o.average,
-                 "Return the mean pose of the last convergence window (true) or the last iterate "
-                 "(false)" +
-                     both(d.average_last_window ? "true" : "false",
-                          p.average_last_window ? "true" : "false"));
+                 "Return the mean of the last --window iterates once the final stage is "
+                 "stationary (true) or the last iterate (false)" +
+                     both(d.average_iterates ? "true" : "false", p.average_iterates ? "true" : "false"));
   app.add_option("--scaling-origin", o.scaling_origin,
                  "Origin of the scaled space and pivot of the rotation: 'corner' (the paper, points "
                  "in [0, 1]) or 'center' (points in [-0.5, 0.5])" +
@@ -135,12 +140,15 @@ inline SgdSettings make_settings(const SettingsOptions& o) {
   SgdSettings s = o.preset == "paper" ? SgdSettings::paper(type.value_or(OptimizerType::sgd))
                                       : SgdSettings{};
   if (type && o.preset != "paper") {
+    // Each step rule has its own natural step size: adaptive ones take a length per step, the
+    // fixed step a gradient multiplier (the paper's 2), Gauss-Newton a fraction of a Newton step.
     s.optimizer.type = *type;
-    // Adaptive optimisers take a length per step, not a gradient multiplier.
-    if (*type != OptimizerType::sgd && *type != OptimizerType::momentum) {
-      s.optimizer.learning_rate = SgdSettings::paper(OptimizerType::adam).optimizer.learning_rate;
-    } else if (*type == OptimizerType::momentum) {
-      s.optimizer.learning_rate *= 1.0 - s.optimizer.momentum;
+    switch (*type) {
+      case OptimizerType::sgd: s.optimizer.learning_rate = 2.0; break;
+      case OptimizerType::momentum: s.optimizer.learning_rate = 2.0 * (1.0 - s.optimizer.momentum); break;
+      case OptimizerType::gauss_newton: s.optimizer.learning_rate = 1.0; break;
+      case OptimizerType::adam:
+      case OptimizerType::rmsprop: s.optimizer.learning_rate = SgdSettings{}.optimizer.learning_rate; break;
     }
   }
   const auto unit = o.max_distance_unit == "m" ? Distance::Unit::metres : Distance::Unit::scaled;
@@ -155,14 +163,14 @@ inline SgdSettings make_settings(const SettingsOptions& o) {
   if (o.rms_decay) s.optimizer.rms_decay = *o.rms_decay;
   if (o.epsilon) s.optimizer.epsilon = *o.epsilon;
   if (o.window) s.convergence.window = *o.window;
-  if (o.patience) s.convergence.patience = *o.patience;
+  if (o.chi2) s.convergence.chi2 = *o.chi2;
   if (o.translation_tolerance) s.convergence.translation_tolerance = *o.translation_tolerance;
   if (o.rotation_tolerance) s.convergence.rotation_tolerance = *o.rotation_tolerance;
   if (o.refine_stages) s.refinement.stages = *o.refine_stages;
   if (o.step_decay) s.refinement.step_decay = *o.step_decay;
   if (o.distance_factor) s.refinement.distance_factor = *o.distance_factor;
   if (o.min_distance) s.refinement.min_distance = {*o.min_distance, unit};
-  if (o.average) s.average_last_window = *o.average;
+  if (o.average) s.average_iterates = *o.average;
   if (o.evaluation_points) s.evaluation_points = *o.evaluation_points;
   if (o.scaling_origin) {
     s.scaling_origin = *o.scaling_origin == "corner" ? ScalingOrigin::lower_corner : ScalingOrigin::center;

@@ -34,7 +34,7 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   s.optimizer.learning_rate = optimizer == OptimizerType::sgd ? 2.0 : 0.01;
   s.scaling_origin = ScalingOrigin::lower_corner;
   s.refinement.stages = 0;
-  s.average_last_window = false;
+  s.average_iterates = false;
   return s;
 }
 
@@ -45,8 +45,10 @@ void SgdSettings::validate() const {
     throw InvalidSettingsError("max correspondence distance must be positive and finite");
   }
   optimizer.validate();
-  if (convergence.window == 0) throw InvalidSettingsError("convergence window must be at least 1");
-  if (convergence.patience == 0) throw InvalidSettingsError("convergence patience must be at least 1");
+  if (convergence.window < 8) throw InvalidSettingsError("convergence window must be at least 8");
+  if (!(convergence.chi2 > 0.0) || !std::isfinite(convergence.chi2)) {
+    throw InvalidSettingsError("convergence chi2 must be positive and finite");
+  }
   if (!(convergence.translation_tolerance >= 0.0) || !(convergence.rotation_tolerance >= 0.0) ||
       !std::isfinite(convergence.translation_tolerance) ||
       !std::isfinite(convergence.rotation_tolerance)) {
@@ -65,24 +67,6 @@ void SgdSettings::validate() const {
 }
 
 namespace {
-
-// Mean and spread of the pose over one convergence window.
-struct WindowMean {
-  PoseVector sum = PoseVector::Zero();
-  PoseVector sum_sq = PoseVector::Zero();
-  std::size_t count = 0;
-  void add(const PoseVector& theta) {
-    sum += theta;
-    sum_sq += theta.cwiseProduct(theta);
-    ++count;
-  }
-  [[nodiscard]] PoseVector mean() const { return sum / static_cast<double>(count); }
-  /// Per-parameter standard deviation of the iterates around the window mean (the jitter).
-  [[nodiscard]] PoseVector spread() const {
-    const PoseVector m = mean();
-    return (sum_sq / static_cast<double>(count) - m.cwiseProduct(m)).cwiseMax(0.0).cwiseSqrt();
-  }
-};
 
 double median_of(std::vector<float>& values) {
   if (values.empty()) return 0.0;
@@ -140,14 +124,17 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
 
   std::vector<std::uint32_t> batch;
   batch.reserve(settings.batch_size);
-  std::vector<float> window_distances;  // scaled correspondence distances of the current window
-  window_distances.reserve(settings.batch_size * settings.convergence.window);
-  WindowMean window;
-  PoseVector previous_window_mean = theta;
-  bool have_previous_window = false;
-  std::size_t quiet_windows = 0;
-  std::size_t window_inliers = 0;
-  PoseVector returned = theta;
+  // Scaled correspondence distances of the current and the last complete window of iterations.
+  std::vector<float> distances;
+  std::vector<float> last_window_distances;
+  distances.reserve(settings.batch_size * settings.convergence.window);
+  ConvergenceMonitor monitor(settings.convergence);
+  std::size_t stage = 0;
+  std::size_t empty_batches = 0;
+  // Polyak tail average of the final stage, taken once that stage is stationary.
+  bool averaging = false;
+  PoseVector average_sum = PoseVector::Zero();
+  std::size_t average_count = 0;
 
   const auto finish = [&](StopReason reason, std::string message) {
     result.stop_reason = reason;
@@ -160,7 +147,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
     // Algorithm 1, lines 2-8: next mini-batch, moved by theta_{t-1}, paired with its nearest
     // reference point within d_max. The tree lives in metres; the pose lives in scaled space.
     sampler.next_batch(settings.batch_size, batch);
-    PointToPointGradient grad(theta);
+    PointToPointGradient grad(theta, optimizer.needs_hessian());
     const auto d_max_sq_m = static_cast<float>(d_max * k * d_max * k);
     std::size_t inliers = 0;
     for (const std::uint32_t i : batch) {
@@ -171,16 +158,16 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       if (!nn) continue;
       const Eigen::Vector3d r = (reference.cloud().points[nn->index].cast<double>() - o) / k;
       grad.add(s, moved, r);
-      window_distances.push_back(std::sqrt(nn->squared_distance) / static_cast<float>(k));
+      distances.push_back(std::sqrt(nn->squared_distance) / static_cast<float>(k));
       ++inliers;
     }
     // Lines 9-10: one optimiser step on the mean cost over the kept pairs (eq. 6, 7).
-    const PoseVector g = grad.gradient(settings.batch_size);
-    theta += optimizer.step(g, lr_scale);
+    const PoseVector gradient = grad.gradient(settings.batch_size);
+    const PoseVector step =
+        optimizer.step(gradient, grad.hessian(settings.batch_size), lr_scale);
+    theta += step;
     result.iterations = it + 1;
     result.points_processed += batch.size();
-    window_inliers += inliers;
-    window.add(theta);
 
     if (settings.record_trace) {
       result.trace.push_back({result.iterations, result.points_processed,
@@ -190,64 +177,60 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
     }
     if (!theta.allFinite() || theta.head<3>().cwiseAbs().maxCoeff() > 1e3) {
       finish(StopReason::diverged, "the pose diverged (step size too large for this data?)");
-      returned = theta;
-      break;
-    }
-    if (window.count < settings.convergence.window) continue;
-
-    // End of a window: the averaged-step convergence test.
-    if (window_inliers == 0) {
-      finish(StopReason::no_correspondences,
-             "no source point had a reference point within d_max = " +
-                 std::to_string(d_max * k) + " m for " + std::to_string(window.count) +
-                 " mini-batches");
       stopped = true;
-      returned = window.mean();
       break;
     }
-    const PoseVector mean = window.mean();
-    returned = settings.average_last_window ? mean : theta;
-    if (have_previous_window) {
-      // Averaged-step test: the window mean has stopped moving when its drift is below the
-      // absolute tolerances, or below the jitter of the iterates around it (the noise floor of
-      // the current step size: smaller steps can still improve, which refinement then does).
-      const PoseVector delta = mean - previous_window_mean;
-      const PoseVector jitter = window.spread();
-      const double dt = delta.head<3>().norm();
-      double dr = 0.0;
-      for (int a = 3; a < 6; ++a) dr += std::abs(wrap_angle(delta[a]));
-      const bool below_tolerance = dt < settings.convergence.translation_tolerance &&
-                                   dr < settings.convergence.rotation_tolerance;
-      const bool below_jitter = (delta.cwiseAbs().array() <= jitter.array()).all();
-      quiet_windows = (below_tolerance || below_jitter) ? quiet_windows + 1 : 0;
+    empty_batches = inliers == 0 ? empty_batches + 1 : 0;
+    if (empty_batches >= settings.convergence.window) {
+      finish(StopReason::no_correspondences,
+             "no source point had a reference point within d_max = " + std::to_string(d_max * k) +
+                 " m for " + std::to_string(empty_batches) + " mini-batches in a row");
+      stopped = true;
+      break;
     }
-    if (quiet_windows >= settings.convergence.patience) {
-      ++result.stages;
-      if (result.stages > settings.refinement.stages) {
+    if ((it + 1) % settings.convergence.window == 0) {
+      last_window_distances.swap(distances);
+      distances.clear();
+    }
+
+    if (averaging) {
+      average_sum += theta;
+      ++average_count;
+      if (average_count >= settings.convergence.window) {
         finish(StopReason::converged, "converged");
         stopped = true;
-        break;
       }
-      // Refinement stage: smaller steps, tighter correspondences.
-      lr_scale *= settings.refinement.step_decay;
-      const double robust = settings.refinement.distance_factor * median_of(window_distances);
-      d_max = std::clamp(robust, d_min, d_max);
-      quiet_windows = 0;
-      have_previous_window = false;
-    } else {
-      have_previous_window = true;
+      continue;
     }
-    previous_window_mean = mean;
-    window = WindowMean{};
-    window_distances.clear();
-    window_inliers = 0;
+    if (!monitor.update(gradient, step)) continue;
+
+    // The stage is stationary.
+    ++result.stages;
+    if (stage == settings.refinement.stages) {
+      if (!settings.average_iterates) {
+        finish(StopReason::converged, "converged");
+        stopped = true;
+      } else {
+        averaging = true;
+      }
+      continue;
+    }
+    // Refinement: tighter correspondences, smaller steps.
+    ++stage;
+    lr_scale *= settings.refinement.step_decay;
+    std::vector<float>& recent =
+        last_window_distances.size() > distances.size() ? last_window_distances : distances;
+    const double robust = settings.refinement.distance_factor * median_of(recent);
+    d_max = std::clamp(robust, d_min, d_max);
+    monitor.start_stage();
   }
-  if (!stopped && result.stop_reason != StopReason::diverged) {
+  if (!stopped) {
     finish(StopReason::max_iterations, "reached the iteration limit of " +
                                            std::to_string(settings.max_iterations) +
                                            " before converging");
-    if (window.count > 0 && settings.average_last_window) returned = window.mean();
   }
+  const PoseVector returned =
+      average_count > 0 ? PoseVector(average_sum / static_cast<double>(average_count)) : theta;
 
   result.T_reference_source = scaling.to_metric(transform_from_pose(returned));
   result.final_max_distance_m = d_max * k;

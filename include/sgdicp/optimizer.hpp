@@ -1,17 +1,21 @@
 #pragma once
 // First-order optimisers for the update of paper eq. 3, theta_t = theta_{t-1} - alpha A g, with
 // A = identity: fixed step ("vanilla SGD", the paper's alpha = 2), heavy-ball momentum, RMSProp
-// and Adam (Kingma and Ba 2015, the paper's "Adam-SGD").
+// and Adam (Kingma and Ba 2015, the paper's "Adam-SGD"); and a pre-conditioned step with A the
+// inverse of a damped, averaged mini-batch Gauss-Newton matrix (eq. 3 with A != I, which the
+// paper leaves for future work).
 #include <cmath>
 #include <string>
 #include <string_view>
 
 #include "sgdicp/error.hpp"
+#include <Eigen/Cholesky>
+
 #include "sgdicp/pose.hpp"
 
 namespace sgdicp {
 
-enum class OptimizerType { sgd, momentum, rmsprop, adam };
+enum class OptimizerType { sgd, momentum, rmsprop, adam, gauss_newton };
 
 [[nodiscard]] inline std::string_view to_string(OptimizerType t) {
   switch (t) {
@@ -19,6 +23,7 @@ enum class OptimizerType { sgd, momentum, rmsprop, adam };
     case OptimizerType::momentum: return "momentum";
     case OptimizerType::rmsprop: return "rmsprop";
     case OptimizerType::adam: return "adam";
+    case OptimizerType::gauss_newton: return "gauss-newton";
   }
   return "?";
 }
@@ -26,11 +31,11 @@ enum class OptimizerType { sgd, momentum, rmsprop, adam };
 /// Parses "sgd", "momentum", "rmsprop" or "adam"; throws InvalidSettingsError otherwise.
 [[nodiscard]] inline OptimizerType optimizer_from_string(std::string_view name) {
   for (const auto t : {OptimizerType::sgd, OptimizerType::momentum, OptimizerType::rmsprop,
-                       OptimizerType::adam}) {
+                       OptimizerType::adam, OptimizerType::gauss_newton}) {
     if (name == to_string(t)) return t;
   }
   throw InvalidSettingsError("unknown optimizer '" + std::string(name) +
-                             "' (expected sgd, momentum, rmsprop or adam)");
+                             "' (expected sgd, momentum, rmsprop, adam or gauss-newton)");
 }
 
 struct OptimizerSettings {
@@ -42,14 +47,23 @@ struct OptimizerSettings {
   double beta2 = 0.999;        ///< Adam: decay of the mean of squared gradients
   double rms_decay = 0.9;      ///< RMSProp: decay of the mean of squared gradients
   double epsilon = 1e-8;       ///< Adam/RMSProp: added to the root mean square
+  /// Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices.
+  double hessian_decay = 0.9;
+  /// Gauss-Newton: Levenberg damping, relative to the mean diagonal of the averaged matrix.
+  double damping = 1e-3;
 
   void validate() const {
     const auto in_unit = [](double v) { return v >= 0.0 && v < 1.0; };
     if (!(learning_rate > 0.0) || !std::isfinite(learning_rate)) {
       throw InvalidSettingsError("learning rate must be positive and finite");
     }
-    if (!in_unit(momentum) || !in_unit(beta1) || !in_unit(beta2) || !in_unit(rms_decay)) {
-      throw InvalidSettingsError("momentum, beta1, beta2 and rms-decay must be in [0, 1)");
+    if (!in_unit(momentum) || !in_unit(beta1) || !in_unit(beta2) || !in_unit(rms_decay) ||
+        !in_unit(hessian_decay)) {
+      throw InvalidSettingsError(
+          "momentum, beta1, beta2, rms-decay and hessian-decay must be in [0, 1)");
+    }
+    if (!(damping >= 0.0) || !std::isfinite(damping)) {
+      throw InvalidSettingsError("damping must be finite and non-negative");
     }
     if (!(epsilon > 0.0) || !std::isfinite(epsilon)) {
       throw InvalidSettingsError("epsilon must be positive and finite");
@@ -64,9 +78,15 @@ class Optimizer {
     settings_.validate();
   }
 
-  /// The increment -alpha * A(g) * g for gradient g, with learning-rate multiplier lr_scale
-  /// (used by step-size decay schedules).
-  [[nodiscard]] PoseVector step(const PoseVector& g, double lr_scale = 1.0) {
+  /// Whether step() needs the Gauss-Newton matrix of the mini-batch.
+  [[nodiscard]] bool needs_hessian() const noexcept {
+    return settings_.type == OptimizerType::gauss_newton;
+  }
+
+  /// The increment -alpha * A * g for gradient g (and Gauss-Newton matrix h, used only by the
+  /// pre-conditioned step), with learning-rate multiplier lr_scale (for decay schedules).
+  [[nodiscard]] PoseVector step(const PoseVector& g, const Eigen::Matrix<double, 6, 6>& h,
+                                double lr_scale = 1.0) {
     const double alpha = settings_.learning_rate * lr_scale;
     ++t_;
     switch (settings_.type) {
@@ -88,6 +108,17 @@ class Optimizer {
         const PoseVector v_hat = second_ / c2;
         return -alpha * m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + settings_.epsilon).matrix());
       }
+      case OptimizerType::gauss_newton: {
+        // Averaging the curvature over batches keeps A well conditioned when one batch is
+        // degenerate; the gradient stays the fresh, unbiased mini-batch gradient.
+        hessian_ = settings_.hessian_decay * hessian_ + (1.0 - settings_.hessian_decay) * h;
+        const double c = 1.0 - std::pow(settings_.hessian_decay, static_cast<double>(t_));
+        Eigen::Matrix<double, 6, 6> a = hessian_ / c;
+        const double lambda = settings_.damping * a.trace() / 6.0;
+        if (!(lambda > 0.0)) return PoseVector::Zero();  // no pairs yet: no curvature, no step
+        a.diagonal().array() += lambda;
+        return -alpha * a.ldlt().solve(g);
+      }
     }
     return PoseVector::Zero();
   }
@@ -99,6 +130,7 @@ class Optimizer {
   PoseVector first_ = PoseVector::Zero();
   PoseVector second_ = PoseVector::Zero();
   PoseVector velocity_ = PoseVector::Zero();
+  Eigen::Matrix<double, 6, 6> hessian_ = Eigen::Matrix<double, 6, 6>::Zero();
   long t_ = 0;
 };
 
