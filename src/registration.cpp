@@ -175,8 +175,12 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
                               settings.optimizer.learning_rate * lr_scale, d_max * k, inliers,
                               grad.cost(settings.batch_size)});
     }
-    if (!theta.allFinite() || theta.head<3>().cwiseAbs().maxCoeff() > 1e3) {
-      finish(StopReason::diverged, "the pose diverged (step size too large for this data?)");
+    // Both clouds lie in the unit box of the scaled space: a translation of 10 box sizes can
+    // only come from steps that blew up.
+    if (!theta.allFinite() || theta.head<3>().cwiseAbs().maxCoeff() > 10.0) {
+      finish(StopReason::diverged,
+             "the pose diverged (translation beyond 10 times the scene size; step size too "
+             "large for this data?)");
       stopped = true;
       break;
     }
@@ -202,7 +206,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       }
       continue;
     }
-    if (!monitor.update(gradient, step)) continue;
+    if (!monitor.update(gradient, step, inliers)) continue;
 
     // The stage is stationary.
     ++result.stages;

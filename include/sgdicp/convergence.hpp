@@ -9,6 +9,8 @@
 // to any linear change of parameters, so it also sees slow progress along a narrow valley of the
 // cost, where the gradient is small but so is its noise (a per-coordinate test does not).
 // Exact data, where gradients and steps vanish, is caught by an absolute tolerance on the steps.
+// A window whose mini-batches found fewer than 3 pairs each on average (too few to fix 6
+// parameters) is never stationary: a zero gradient there means "no data", not "optimum".
 #include <cmath>
 #include <cstddef>
 
@@ -42,12 +44,14 @@ class ConvergenceMonitor {
     sum_ = PoseVector::Zero();
     sum_outer_ = PoseMatrix::Zero();
     all_steps_small_ = true;
+    pairs_ = 0;
   }
 
-  /// Records one iteration's mini-batch gradient and step; returns true at the end of a window
-  /// that tested stationary.
-  bool update(const PoseVector& gradient, const PoseVector& step) {
+  /// Records one iteration's mini-batch gradient, step and number of pairs; returns true at
+  /// the end of a window that tested stationary.
+  bool update(const PoseVector& gradient, const PoseVector& step, std::size_t pairs) {
     ++count_;
+    pairs_ += pairs;
     sum_ += gradient;
     sum_outer_.noalias() += gradient * gradient.transpose();
     double rotation = 0.0;
@@ -62,7 +66,8 @@ class ConvergenceMonitor {
     covariance.diagonal().array() += 1e-12 * covariance.trace() / 6.0 + 1e-300;
     const double t2 = n * mean.dot(covariance.ldlt().solve(mean));
     const bool insignificant = t2 <= settings_.chi2 * (n - 1.0) / (n - 6.0);
-    const bool stationary = insignificant || all_steps_small_;
+    const bool enough_pairs = pairs_ >= 3 * count_;
+    const bool stationary = enough_pairs && (insignificant || all_steps_small_);
     start_stage();
     return stationary;
   }
@@ -73,6 +78,7 @@ class ConvergenceMonitor {
   PoseVector sum_ = PoseVector::Zero();
   PoseMatrix sum_outer_ = PoseMatrix::Zero();
   bool all_steps_small_ = true;
+  std::size_t pairs_ = 0;
 };
 
 }  // namespace sgdicp

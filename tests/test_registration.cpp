@@ -1,0 +1,379 @@
+// Registration against ground truth: synthetic clouds, the real pairs of shared/data, seeds,
+// threads, and every way the input can be bad.
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <random>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "sgdicp/error.hpp"
+#include "sgdicp/io.hpp"
+#include "sgdicp/metrics.hpp"
+#include "sgdicp/pairs.hpp"
+#include "sgdicp/registration.hpp"
+
+namespace sgdicp {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A small man-made scene without symmetries: a floor, two walls, a box and a ball, 60k points
+// (about 4 cm apart) with 2 mm noise, in metres.
+PointCloud synthetic_scene(std::uint64_t seed, std::size_t n = 60000) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> u(0.0F, 1.0F);
+  std::normal_distribution<float> noise(0.0F, 0.002F);
+  PointCloud cloud;
+  cloud.points.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float a = u(rng), b = u(rng);
+    Eigen::Vector3f p;
+    switch (i % 5) {
+      case 0: p = {6.0F * a, 4.0F * b, 0.0F}; break;                   // floor
+      case 1: p = {6.0F * a, 0.0F, 2.5F * b}; break;                   // wall along x
+      case 2: p = {0.0F, 4.0F * a, 2.5F * b}; break;                   // wall along y
+      case 3: p = {2.0F + 0.8F * a, 1.5F + 0.5F * b, 0.9F}; break;     // box top
+      default: {                                                        // ball
+        const float th = 2.0F * std::numbers::pi_v<float> * a, ph = std::acos(2.0F * b - 1.0F);
+        p = Eigen::Vector3f(4.2F, 2.8F, 0.6F) +
+            0.5F * Eigen::Vector3f(std::sin(ph) * std::cos(th), std::sin(ph) * std::sin(th), std::cos(ph));
+      }
+    }
+    cloud.points.push_back(p + Eigen::Vector3f(noise(rng), noise(rng), noise(rng)));
+  }
+  return cloud;
+}
+
+Eigen::Matrix4d make_transform(double roll, double pitch, double yaw, const Eigen::Vector3d& t) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = rotation_from_rpy(roll, pitch, yaw);
+  T.topRightCorner<3, 1>() = t;
+  return T;
+}
+
+PointCloud transformed(const PointCloud& cloud, const Eigen::Matrix4d& T) {
+  PointCloud out = cloud;
+  const Eigen::Matrix3f r = T.topLeftCorner<3, 3>().cast<float>();
+  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
+  for (auto& p : out.points) p = r * p + t;
+  return out;
+}
+
+std::filesystem::path shared(const std::string& relative) {
+  return std::filesystem::path(SGDICP_SHARED_DATA) / relative;
+}
+
+#define SKIP_WITHOUT(path)                                                      \
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << (path)
+
+// ---------------------------------------------------------------------------------------------
+// Synthetic: the reference is an independent sampling of the same scene moved by T_gt, so T_gt
+// is exact but no point has an exact twin: with samples ~4 cm apart, nearest-neighbour
+// distances are ~2 cm (the inlier RMSE bound) and the point-to-point optimum is biased by a few
+// mm; 1 cm and 0.3 deg leave room for that and fail any wrong basin.
+
+struct SyntheticCase {
+  const char* name;
+  double roll, pitch, yaw;
+  Eigen::Vector3d t;
+};
+
+class SyntheticRecovery : public ::testing::TestWithParam<SyntheticCase> {};
+
+TEST_P(SyntheticRecovery, DefaultSettingsRecoverTheTransform) {
+  const auto& c = GetParam();
+  const Eigen::Matrix4d T_gt = make_transform(c.roll, c.pitch, c.yaw, c.t);
+  const PointCloud source = synthetic_scene(1);
+  const PointCloud reference = transformed(synthetic_scene(2), T_gt);
+  const RegistrationResult r = align(source, reference);
+  EXPECT_TRUE(r.converged) << r.message;
+  EXPECT_LT(translation_error(r.T_reference_source, T_gt), 0.01);
+  EXPECT_LT(rotation_error_geodesic(r.T_reference_source, T_gt), 0.3 * kDeg);
+  EXPECT_GT(r.inlier_ratio, 0.9);
+  EXPECT_LT(r.inlier_rmse_m, 0.03);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Transforms, SyntheticRecovery,
+    ::testing::Values(SyntheticCase{"identity", 0, 0, 0, {0, 0, 0}},
+                      SyntheticCase{"translation", 0, 0, 0, {0.3, -0.2, 0.1}},
+                      SyntheticCase{"yaw20", 0, 0, 20 * kDeg, {0.1, 0.2, 0}},
+                      SyntheticCase{"mixed", 5 * kDeg, -8 * kDeg, 15 * kDeg, {-0.25, 0.1, 0.05}}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+TEST(Synthetic, PaperPresetsRecoverAModerateTransform) {
+  const Eigen::Matrix4d T_gt = make_transform(2 * kDeg, -3 * kDeg, 10 * kDeg, {0.2, -0.1, 0.05});
+  const PointCloud source = synthetic_scene(3);
+  const PointCloud reference = transformed(synthetic_scene(4), T_gt);
+  for (const auto type : {OptimizerType::sgd, OptimizerType::adam}) {
+    const RegistrationResult r = align(source, reference, SgdSettings::paper(type));
+    SCOPED_TRACE(std::string(to_string(type)));
+    // The paper's single phase keeps d_max = 0.5 scaled (no outliers here) and returns the last
+    // noisy iterate: a cm and a degree are what it reaches on 20k points.
+    EXPECT_LT(translation_error(r.T_reference_source, T_gt), 0.03);
+    EXPECT_LT(rotation_error_geodesic(r.T_reference_source, T_gt), 1.0 * kDeg);
+  }
+}
+
+TEST(Synthetic, EveryOptimizerRecoversTheTransform) {
+  const Eigen::Matrix4d T_gt = make_transform(0, 0, 8 * kDeg, {0.15, 0.1, 0});
+  const PointCloud source = synthetic_scene(5);
+  const PointCloud reference = transformed(synthetic_scene(6), T_gt);
+  for (const auto& [type, lr] : std::vector<std::pair<OptimizerType, double>>{
+           {OptimizerType::sgd, 2.0}, {OptimizerType::momentum, 0.2}, {OptimizerType::rmsprop, 0.01},
+           {OptimizerType::adam, 0.01}, {OptimizerType::gauss_newton, 1.0}}) {
+    SgdSettings s;
+    s.optimizer.type = type;
+    s.optimizer.learning_rate = lr;
+    s.max_iterations = 20000;
+    const RegistrationResult r = align(source, reference, s);
+    SCOPED_TRACE(std::string(to_string(type)));
+    EXPECT_LT(translation_error(r.T_reference_source, T_gt), 0.02);
+    EXPECT_LT(rotation_error_geodesic(r.T_reference_source, T_gt), 0.5 * kDeg);
+  }
+}
+
+TEST(Synthetic, InitialGuessIsUsed) {
+  // 60 degrees of yaw, started from a guess 5 degrees and 7 cm away.
+  const Eigen::Matrix4d T_gt = make_transform(0, 0, 60 * kDeg, {0.5, 0.3, 0});
+  const PointCloud source = synthetic_scene(7);
+  const PointCloud reference = transformed(synthetic_scene(8), T_gt);
+  const Eigen::Matrix4d guess = make_transform(0, 0, 55 * kDeg, {0.45, 0.35, 0});
+  const RegistrationResult r = align(source, reference, SgdSettings{}, guess);
+  EXPECT_LT(translation_error(r.T_reference_source, T_gt), 0.01);
+  EXPECT_LT(rotation_error_geodesic(r.T_reference_source, T_gt), 0.3 * kDeg);
+}
+
+TEST(Synthetic, SameSeedSameBitsOtherSeedOtherPath) {
+  const Eigen::Matrix4d T_gt = make_transform(0, 0, 10 * kDeg, {0.1, 0.1, 0});
+  const PointCloud source = synthetic_scene(9);
+  const PointCloud reference = transformed(synthetic_scene(10), T_gt);
+  SgdSettings s;
+  s.record_trace = true;
+  const RegistrationResult a = align(source, reference, s);
+  const RegistrationResult b = align(source, reference, s);
+  EXPECT_EQ(a.T_reference_source, b.T_reference_source);  // bitwise
+  EXPECT_EQ(a.iterations, b.iterations);
+  ASSERT_EQ(a.trace.size(), b.trace.size());
+  s.seed += 1;
+  const RegistrationResult c = align(source, reference, s);
+  EXPECT_NE(a.T_reference_source, c.T_reference_source);
+  EXPECT_LT(translation_error(c.T_reference_source, T_gt), 0.01);
+}
+
+TEST(Synthetic, TraceDescribesEveryIteration) {
+  const PointCloud source = synthetic_scene(11);
+  const PointCloud reference = transformed(synthetic_scene(12), make_transform(0, 0, 0.1, {0.1, 0, 0}));
+  SgdSettings s;
+  s.record_trace = true;
+  const RegistrationResult r = align(source, reference, s);
+  ASSERT_EQ(r.trace.size(), r.iterations);
+  for (std::size_t i = 0; i < r.trace.size(); ++i) {
+    EXPECT_EQ(r.trace[i].iteration, i + 1);
+    EXPECT_EQ(r.trace[i].points_processed, (i + 1) * s.batch_size);
+    EXPECT_LE(r.trace[i].inliers, s.batch_size);
+    EXPECT_GT(r.trace[i].step_size, 0.0);
+    if (i > 0) {
+      EXPECT_LE(r.trace[i].max_distance_m, r.trace[i - 1].max_distance_m);  // never grows
+    }
+  }
+  EXPECT_EQ(r.points_processed, r.iterations * s.batch_size);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Status reporting and bad input.
+
+TEST(Status, IterationLimitIsReportedAsNotConverged) {
+  const PointCloud source = synthetic_scene(13);
+  const PointCloud reference = transformed(synthetic_scene(14), make_transform(0, 0, 0.3, {0.3, 0, 0}));
+  SgdSettings s;
+  s.max_iterations = 5;
+  const RegistrationResult r = align(source, reference, s);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.stop_reason, StopReason::max_iterations);
+  EXPECT_EQ(r.iterations, 5U);
+  EXPECT_NE(r.message.find("limit"), std::string::npos);
+}
+
+TEST(Status, NoCorrespondencesIsReported) {
+  const PointCloud source = synthetic_scene(15);
+  // The reference is 100 m away and d_max is 0.1 m: no pair can ever be found.
+  const PointCloud reference = transformed(synthetic_scene(16), make_transform(0, 0, 0, {100, 0, 0}));
+  SgdSettings s;
+  s.max_correspondence_distance = Distance::metres(0.1);
+  const RegistrationResult r = align(source, reference, s);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.stop_reason, StopReason::no_correspondences);
+  EXPECT_EQ(r.inliers, 0U);
+  EXPECT_NE(r.message.find("d_max"), std::string::npos);
+}
+
+TEST(Status, DivergenceIsReported) {
+  const PointCloud source = synthetic_scene(17);
+  const PointCloud reference = transformed(synthetic_scene(18), make_transform(0, 0, 0.2, {0.2, 0, 0}));
+  SgdSettings s = SgdSettings::paper(OptimizerType::sgd);
+  s.optimizer.learning_rate = 1e4;  // absurd but valid: the pose must blow up, and say so
+  const RegistrationResult r = align(source, reference, s);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.stop_reason, StopReason::diverged);
+}
+
+TEST(BadInput, EmptyTooSmallAndNonFiniteCloudsThrow) {
+  const PointCloud good = synthetic_scene(19, 2000);
+  EXPECT_THROW((void)align(PointCloud{}, good), InvalidInputError);
+  EXPECT_THROW((void)align(good, PointCloud{}), InvalidInputError);
+  PointCloud small;
+  small.points.assign(100, Eigen::Vector3f(1, 2, 3));
+  try {
+    (void)align(small, good);
+    FAIL() << "expected InvalidInputError";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fewer than the mini-batch size"), std::string::npos);
+  }
+  PointCloud nan_source = good;
+  nan_source.points[5].x() = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW((void)align(nan_source, good), InvalidInputError);
+  PointCloud inf_reference = good;
+  inf_reference.points[7].z() = std::numeric_limits<float>::infinity();
+  EXPECT_THROW((void)align(good, inf_reference), InvalidInputError);
+  PointCloud single_point;
+  single_point.points.assign(500, Eigen::Vector3f(1, 1, 1));
+  EXPECT_THROW((void)align(single_point, single_point), InvalidInputError);  // zero extent
+}
+
+TEST(BadInput, BadInitialTransformsThrow) {
+  const PointCloud cloud = synthetic_scene(20, 2000);
+  Eigen::Matrix4d scaled = Eigen::Matrix4d::Identity() * 2.0;
+  scaled(3, 3) = 1.0;
+  EXPECT_THROW((void)align(cloud, cloud, SgdSettings{}, scaled), InvalidInputError);
+  Eigen::Matrix4d reflection = Eigen::Matrix4d::Identity();
+  reflection(0, 0) = -1.0;
+  EXPECT_THROW((void)align(cloud, cloud, SgdSettings{}, reflection), InvalidInputError);
+  Eigen::Matrix4d nan = Eigen::Matrix4d::Identity();
+  nan(0, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW((void)align(cloud, cloud, SgdSettings{}, nan), InvalidInputError);
+}
+
+TEST(BadInput, AbsurdSettingsThrow) {
+  const PointCloud cloud = synthetic_scene(21, 2000);
+  const auto expect_invalid = [&](auto mutate) {
+    SgdSettings s;
+    mutate(s);
+    EXPECT_THROW((void)align(cloud, cloud, s), InvalidSettingsError);
+  };
+  expect_invalid([](SgdSettings& s) { s.batch_size = 0; });
+  expect_invalid([](SgdSettings& s) { s.optimizer.learning_rate = -1.0; });
+  expect_invalid([](SgdSettings& s) { s.optimizer.learning_rate = std::nan(""); });
+  expect_invalid([](SgdSettings& s) { s.max_correspondence_distance = Distance::metres(0.0); });
+  expect_invalid([](SgdSettings& s) { s.max_correspondence_distance = Distance::scaled(INFINITY); });
+  expect_invalid([](SgdSettings& s) { s.optimizer.beta1 = 1.0; });
+  expect_invalid([](SgdSettings& s) { s.convergence.window = 3; });
+  expect_invalid([](SgdSettings& s) { s.convergence.chi2 = 0.0; });
+  expect_invalid([](SgdSettings& s) { s.refinement.step_decay = 0.0; });
+  expect_invalid([](SgdSettings& s) { s.refinement.distance_factor = -2.0; });
+  expect_invalid([](SgdSettings& s) { s.max_iterations = 0; });
+}
+
+// ---------------------------------------------------------------------------------------------
+// One reference index, many registrations, several threads: the answers must be exactly those
+// of sequential runs.
+
+TEST(ReferenceReuse, ConcurrentRegistrationsMatchSequentialOnes) {
+  const PointCloud reference = synthetic_scene(22);
+  const ReferenceIndex index(reference);
+  std::vector<PointCloud> sources;
+  std::vector<Eigen::Matrix4d> truths;
+  for (int i = 0; i < 4; ++i) {
+    truths.push_back(make_transform(0, 0, 0.05 * i, {0.05 * i, -0.03 * i, 0}));
+    sources.push_back(transformed(synthetic_scene(100 + i), truths.back().inverse()));
+  }
+  std::vector<RegistrationResult> sequential;
+  for (const auto& s : sources) sequential.push_back(align(s, index));
+  std::vector<RegistrationResult> parallel(sources.size());
+  std::vector<std::thread> threads;
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    threads.emplace_back([&, i] { parallel[i] = align(sources[i], index); });
+  }
+  for (auto& t : threads) t.join();
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    EXPECT_EQ(parallel[i].T_reference_source, sequential[i].T_reference_source);
+    EXPECT_LT(translation_error(parallel[i].T_reference_source, truths[i]), 0.01);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Real data (shared/data). Tolerances are set from each dataset's ground-truth quality.
+
+struct PairRun {
+  double t_err, r_err_deg;
+  RegistrationResult result;
+};
+
+PairRun run_pair(const RegistrationPair& pair, const SgdSettings& s) {
+  const PointCloud source = read_point_cloud(pair.source).cloud;
+  const PointCloud reference = read_point_cloud(pair.reference).cloud;
+  const RegistrationResult r = align(source, reference, s);
+  return {translation_error(r.T_reference_source, pair.T_reference_source_gt),
+          rotation_error_geodesic(r.T_reference_source, pair.T_reference_source_gt) / kDeg, r};
+}
+
+TEST(RealData, KittiMovedCopiesTableII) {
+  // The paper's Table II protocol: a scan vs. a copy moved by up to 30 m / 30 deg. The ground
+  // truth is exact and every point has its twin, so only float storage limits the answer
+  // (1e-7 relative on 80 m ranges = 0.01 mm); 5 mm / 0.01 deg leaves room and still fails any
+  // wrong basin by three orders of magnitude.
+  const auto file = shared("pairs/kitti_seq00_moved_copies.txt");
+  SKIP_WITHOUT(file);
+  for (const auto& pair : read_pairs_file(file)) {
+    SCOPED_TRACE(pair.reference.filename().string());
+    const PairRun def = run_pair(pair, SgdSettings{});
+    EXPECT_TRUE(def.result.converged);
+    EXPECT_LT(def.t_err, 0.005);
+    EXPECT_LT(def.r_err_deg, 0.01);
+    const PairRun paper = run_pair(pair, SgdSettings::paper(OptimizerType::sgd));
+    EXPECT_LT(paper.t_err, 0.005);
+    EXPECT_LT(paper.r_err_deg, 0.01);
+  }
+}
+
+TEST(RealData, LibpointmatcherCarPair) {
+  // libpointmatcher's ground truth agrees with its own regression ICP to 7.8 mm / 0.08 deg, and
+  // point-to-point ICP started at the ground truth drifts 1.8 cm / 0.08 deg (PROVENANCE.md): the
+  // point-to-point optimum itself is a couple of cm and a few tenths of a degree away.
+  const auto file = shared("pairs/libpointmatcher_car.txt");
+  SKIP_WITHOUT(file);
+  for (const auto& pair : read_pairs_file(file)) {
+    SCOPED_TRACE(pair.source.filename().string());
+    const PairRun run = run_pair(pair, SgdSettings{});
+    EXPECT_TRUE(run.result.converged);
+    EXPECT_LT(run.t_err, 0.05);
+    EXPECT_LT(run.r_err_deg, 0.5);
+  }
+}
+
+TEST(RealData, BunnyPair) {
+  // Sub-mm ground truth, but 361 sparse points: PROVENANCE.md notes plain point-to-point ICP from
+  // identity stops 3.9 deg short of it. We require 2 mm and better than that 3.9 deg.
+  const auto file = shared("pairs/pcl_bunny.txt");
+  SKIP_WITHOUT(file);
+  const PairRun run = run_pair(read_pairs_file(file).front(), SgdSettings{});
+  EXPECT_TRUE(run.result.converged);
+  EXPECT_LT(run.t_err, 0.002);
+  EXPECT_LT(run.r_err_deg, 3.9);
+}
+
+TEST(RealData, KittiConsecutiveScans) {
+  // Pseudo ground truth good to 2-9 cm (PROVENANCE.md); batch point-to-point ICP gets 0.5-3 cm.
+  const auto file = shared("pairs/kitti_seq00.txt");
+  SKIP_WITHOUT(file);
+  const auto pairs = read_pairs_file(file);
+  const PairRun run = run_pair(pairs.front(), SgdSettings{});
+  EXPECT_TRUE(run.result.converged);
+  EXPECT_LT(run.t_err, 0.05);
+  EXPECT_LT(run.r_err_deg, 0.2);
+}
+
+}  // namespace
+}  // namespace sgdicp
