@@ -22,7 +22,7 @@ struct SettingsOptions {
   std::optional<std::uint64_t> seed;
   std::optional<double> momentum, beta1, beta2, rms_decay, epsilon;
   std::optional<std::size_t> window;
-  std::optional<double> chi2;
+  std::optional<double> chi2, path_efficiency;
   std::optional<double> translation_tolerance, rotation_tolerance;
   std::optional<std::size_t> refine_stages;
   std::optional<double> step_decay, distance_factor, min_distance;
@@ -96,6 +96,11 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                  "Convergence: critical chi-square value (6 dof) of the Hotelling test on the "
                  "window's mean gradient; larger stops earlier" +
                      both(num(d.convergence.chi2), num(p.convergence.chi2)));
+  app.add_option("--path-efficiency", o.path_efficiency,
+                 "Convergence: a stationary window's net displacement over its path length must "
+                 "be at most this (1 = straight travel, ~0.2 = jitter), unitless" +
+                     both(num(d.convergence.max_path_efficiency),
+                          num(p.convergence.max_path_efficiency)));
   app.add_option("--translation-tolerance", o.translation_tolerance,
                  "Convergence: a window whose steps each move the translation less than this "
                  "also ends a stage, scaled units" +
@@ -164,6 +169,7 @@ inline SgdSettings make_settings(const SettingsOptions& o) {
   if (o.epsilon) s.optimizer.epsilon = *o.epsilon;
   if (o.window) s.convergence.window = *o.window;
   if (o.chi2) s.convergence.chi2 = *o.chi2;
+  if (o.path_efficiency) s.convergence.max_path_efficiency = *o.path_efficiency;
   if (o.translation_tolerance) s.convergence.translation_tolerance = *o.translation_tolerance;
   if (o.rotation_tolerance) s.convergence.rotation_tolerance = *o.rotation_tolerance;
   if (o.refine_stages) s.refinement.stages = *o.refine_stages;

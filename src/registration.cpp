@@ -49,6 +49,9 @@ void SgdSettings::validate() const {
   if (!(convergence.chi2 > 0.0) || !std::isfinite(convergence.chi2)) {
     throw InvalidSettingsError("convergence chi2 must be positive and finite");
   }
+  if (!(convergence.max_path_efficiency > 0.0 && convergence.max_path_efficiency <= 1.0)) {
+    throw InvalidSettingsError("convergence max path efficiency must be in (0, 1]");
+  }
   if (!(convergence.translation_tolerance >= 0.0) || !(convergence.rotation_tolerance >= 0.0) ||
       !std::isfinite(convergence.translation_tolerance) ||
       !std::isfinite(convergence.rotation_tolerance)) {

@@ -9,6 +9,11 @@
 // to any linear change of parameters, so it also sees slow progress along a narrow valley of the
 // cost, where the gradient is small but so is its noise (a per-coordinate test does not).
 // Exact data, where gradients and steps vanish, is caught by an absolute tolerance on the steps.
+// The gradient test alone can be fooled far from the optimum, on a plateau of the cost where
+// the gradient is small against its noise while an adaptive step (Adam) still travels. So the
+// path of the window must also look like jitter, not travel: its net displacement divided by
+// its length (1 for a straight path, about 1/sqrt(W) for a random walk, less for oscillation)
+// must stay below `max_path_efficiency`.
 // A window whose mini-batches found fewer than 3 pairs each on average (too few to fix 6
 // parameters) is never stationary: a zero gradient there means "no data", not "optimum".
 #include <cmath>
@@ -27,6 +32,8 @@ struct ConvergenceSettings {
   /// Critical value of the test: the chi-square quantile with 6 degrees of freedom
   /// (12.59 = 95 %, larger = stops earlier).
   double chi2 = 12.59;
+  /// Largest ratio |sum of steps| / sum of |steps| of a stationary window (unitless, (0, 1]).
+  double max_path_efficiency = 0.5;
   /// Absolute test: a window whose steps all moved the translation less than this (scaled
   /// units) ...
   double translation_tolerance = 1e-6;
@@ -45,6 +52,8 @@ class ConvergenceMonitor {
     sum_outer_ = PoseMatrix::Zero();
     all_steps_small_ = true;
     pairs_ = 0;
+    displacement_ = PoseVector::Zero();
+    path_length_ = 0.0;
   }
 
   /// Records one iteration's mini-batch gradient, step and number of pairs; returns true at
@@ -52,6 +61,8 @@ class ConvergenceMonitor {
   bool update(const PoseVector& gradient, const PoseVector& step, std::size_t pairs) {
     ++count_;
     pairs_ += pairs;
+    displacement_ += step;
+    path_length_ += step.norm();
     sum_ += gradient;
     sum_outer_.noalias() += gradient * gradient.transpose();
     double rotation = 0.0;
@@ -66,8 +77,9 @@ class ConvergenceMonitor {
     covariance.diagonal().array() += 1e-12 * covariance.trace() / 6.0 + 1e-300;
     const double t2 = n * mean.dot(covariance.ldlt().solve(mean));
     const bool insignificant = t2 <= settings_.chi2 * (n - 1.0) / (n - 6.0);
+    const bool jittering = displacement_.norm() <= settings_.max_path_efficiency * path_length_;
     const bool enough_pairs = pairs_ >= 3 * count_;
-    const bool stationary = enough_pairs && (insignificant || all_steps_small_);
+    const bool stationary = enough_pairs && ((insignificant && jittering) || all_steps_small_);
     start_stage();
     return stationary;
   }
@@ -79,6 +91,8 @@ class ConvergenceMonitor {
   PoseMatrix sum_outer_ = PoseMatrix::Zero();
   bool all_steps_small_ = true;
   std::size_t pairs_ = 0;
+  PoseVector displacement_ = PoseVector::Zero();
+  double path_length_ = 0.0;
 };
 
 }  // namespace sgdicp
