@@ -1,5 +1,6 @@
 // `sgdicp bench PAIRS_FILE...`: registers every pair of pairs files against their ground truth
 // and prints per-pair errors and times and a summary.
+#include <unistd.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,7 +12,6 @@
 #include <numbers>
 #include <random>
 #include <sstream>
-#include <unistd.h>
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
@@ -77,7 +77,9 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& wh
 }
 
 // Uniform double in [0, 1) from the generator's raw bits (portable, unlike std distributions).
-double uniform01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+double uniform01(std::mt19937_64& rng) {
+  return static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
 
 Eigen::Vector3d random_unit_vector(std::mt19937_64& rng) {
   while (true) {
@@ -177,14 +179,14 @@ void run(const BenchOptions& o) {
     const PointCloud& reference_cloud = cloud(pair.reference, "reference");
     const auto build_start = std::chrono::steady_clock::now();
     const ReferenceIndex reference(reference_cloud);
-    const double build_ms = std::chrono::duration<double, std::milli>(
-                                std::chrono::steady_clock::now() - build_start)
-                                .count();
+    const double build_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
+            .count();
     for (std::size_t rep = 0; rep < o.repeat; ++rep) {
       const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
-      const Eigen::Matrix4d T_init =
-          perturbation ? perturbed(T_gt, *perturbation, j * 1000003ULL + rep)
-                       : Eigen::Matrix4d::Identity();
+      const Eigen::Matrix4d T_init = perturbation
+                                         ? perturbed(T_gt, *perturbation, j * 1000003ULL + rep)
+                                         : Eigen::Matrix4d::Identity();
       SgdSettings s = settings;
       s.seed = settings.seed + rep;
       const RegistrationResult r = align(source, reference, s, T_init);
@@ -196,7 +198,8 @@ void run(const BenchOptions& o) {
       row.repeat = rep;
       row.t_err = translation_error(r.T_reference_source, T_gt);
       row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
-      row.r_err_geo_deg = rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
+      row.r_err_geo_deg =
+          rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
       row.init_t_err = translation_error(T_init, T_gt);
       row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
       row.build_ms = build_ms;
@@ -214,12 +217,12 @@ void run(const BenchOptions& o) {
                   row.converged ? "yes" : "no");
       std::fflush(stdout);
       if (csv) {
-        std::fprintf(csv, "%s,%zu,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s\n",
-                     file.c_str(), row.line, pair.source.string().c_str(),
-                     pair.reference.string().c_str(), rep, row.t_err, row.r_err_sum,
-                     row.r_err_geo_deg, row.init_t_err, row.init_r_geo_deg, row.build_ms,
-                     row.align_ms, row.build_ms + row.align_ms, row.iterations, row.points,
-                     row.source_points, row.converged ? 1 : 0, row.stop_reason.c_str());
+        std::fprintf(
+            csv, "%s,%zu,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s\n",
+            file.c_str(), row.line, pair.source.string().c_str(), pair.reference.string().c_str(),
+            rep, row.t_err, row.r_err_sum, row.r_err_geo_deg, row.init_t_err, row.init_r_geo_deg,
+            row.build_ms, row.align_ms, row.build_ms + row.align_ms, row.iterations, row.points,
+            row.source_points, row.converged ? 1 : 0, row.stop_reason.c_str());
       }
       rows.push_back(std::move(row));
       const double elapsed =

@@ -23,7 +23,9 @@ PointCloud load_cloud(const std::string& path, const std::string& role, bool ver
 Eigen::Matrix4d parse_init(const std::string& text) {
   std::error_code ec;
   if (std::filesystem::is_regular_file(text, ec)) return read_transform(text);
-  if (text.find_first_of("0123456789") == std::string::npos) {
+  // Inline matrices hold only numbers and separators; anything else was meant as a file name.
+  if (text.find_first_not_of("0123456789+-.eE \t\r\n,;[]") != std::string::npos ||
+      text.find_first_of("0123456789") == std::string::npos) {
     throw IoError(text + ": no such transform file");
   }
   return parse_transform(text, "--init");

@@ -49,14 +49,16 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                  "paper coarse phase, then refinement) or 'paper' (m = 160, d_max = 0.5 scaled, "
                  "fixed step 2 or Adam, no refinement, last iterate returned) [default: default]")
       ->check(CLI::IsMember({"default", "paper"}));
-  app.add_option("--optimizer", o.optimizer,
-                 "Step rule of eq. 3: sgd (fixed step), momentum, rmsprop, adam, gauss-newton (A = inverse of the averaged mini-batch Gauss-Newton matrix; learning rate 1 = full step)" +
-                     both(std::string(to_string(d.optimizer.type)), "sgd"))
+  app.add_option(
+         "--optimizer", o.optimizer,
+         "Step rule of eq. 3: sgd (fixed step), momentum, rmsprop, adam, gauss-newton (A = inverse "
+         "of the averaged mini-batch Gauss-Newton matrix; learning rate 1 = full step)" +
+             both(std::string(to_string(d.optimizer.type)), "sgd"))
       ->check(CLI::IsMember({"sgd", "momentum", "rmsprop", "adam", "gauss-newton"}));
   app.add_option("--learning-rate", o.learning_rate,
                  "Step size alpha, in scaled units (the clouds are scaled into [0, 1])" +
                      both(num(d.optimizer.learning_rate) + " for adam/rmsprop, 2 for sgd, 0.2 for "
-                              "momentum, 1 for gauss-newton",
+                                                           "momentum, 1 for gauss-newton",
                           num(p.optimizer.learning_rate) + " for sgd, " +
                               num(pa.optimizer.learning_rate) + " for adam"));
   app.add_option("--batch-size,-m", o.batch_size,
@@ -77,42 +79,49 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                  "Seed of the mini-batch sampler (same seed, same result)" +
                      both(std::to_string(d.seed), std::to_string(p.seed)));
   app.add_option("--momentum", o.momentum,
-                 "Momentum: velocity decay, unitless in [0, 1)" + both(num(d.optimizer.momentum), num(p.optimizer.momentum)));
-  app.add_option("--beta1", o.beta1, "Adam: decay of the gradient mean, in [0, 1)" +
-                                         both(num(d.optimizer.beta1), num(p.optimizer.beta1)));
-  app.add_option("--beta2", o.beta2, "Adam: decay of the squared-gradient mean, in [0, 1)" +
-                                         both(num(d.optimizer.beta2), num(p.optimizer.beta2)));
+                 "Momentum: velocity decay, unitless in [0, 1)" +
+                     both(num(d.optimizer.momentum), num(p.optimizer.momentum)));
+  app.add_option("--beta1", o.beta1,
+                 "Adam: decay of the gradient mean, in [0, 1)" +
+                     both(num(d.optimizer.beta1), num(p.optimizer.beta1)));
+  app.add_option("--beta2", o.beta2,
+                 "Adam: decay of the squared-gradient mean, in [0, 1)" +
+                     both(num(d.optimizer.beta2), num(p.optimizer.beta2)));
   app.add_option("--rms-decay", o.rms_decay,
                  "RMSProp: decay of the squared-gradient mean, in [0, 1)" +
                      both(num(d.optimizer.rms_decay), num(p.optimizer.rms_decay)));
-  app.add_option("--epsilon", o.epsilon, "Adam/RMSProp: added to the gradient RMS, scaled units" +
-                                             both(num(d.optimizer.epsilon), num(p.optimizer.epsilon)));
-  app.add_option("--window", o.window,
-                 "Convergence: iterations per test window, >= 8 (a stage ends after a window whose "
-                 "mean mini-batch gradient is not significantly non-zero); also the length of "
-                 "the final iterate average" +
-                     both(std::to_string(d.convergence.window), std::to_string(p.convergence.window)));
+  app.add_option("--epsilon", o.epsilon,
+                 "Adam/RMSProp: added to the gradient RMS, scaled units" +
+                     both(num(d.optimizer.epsilon), num(p.optimizer.epsilon)));
+  app.add_option(
+      "--window", o.window,
+      "Convergence: iterations per test window, >= 8 (a stage ends after a window whose "
+      "mean mini-batch gradient is not significantly non-zero); also the length of "
+      "the final iterate average" +
+          both(std::to_string(d.convergence.window), std::to_string(p.convergence.window)));
   app.add_option("--chi2", o.chi2,
                  "Convergence: critical chi-square value (6 dof) of the Hotelling test on the "
                  "window's mean gradient; larger stops earlier" +
                      both(num(d.convergence.chi2), num(p.convergence.chi2)));
-  app.add_option("--path-efficiency", o.path_efficiency,
-                 "Convergence: a stationary window's net displacement over its path length must "
-                 "be at most this (1 = straight travel, ~0.2 = jitter), unitless" +
-                     both(num(d.convergence.max_path_efficiency),
-                          num(p.convergence.max_path_efficiency)));
-  app.add_option("--translation-tolerance", o.translation_tolerance,
-                 "Convergence: a window whose steps each move the translation less than this "
-                 "also ends a stage, scaled units" +
-                     both(num(d.convergence.translation_tolerance),
-                          num(p.convergence.translation_tolerance)));
-  app.add_option("--rotation-tolerance", o.rotation_tolerance,
-                 "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
-                 "|d yaw|), rad" +
-                     both(num(d.convergence.rotation_tolerance), num(p.convergence.rotation_tolerance)));
-  app.add_option("--refine-stages", o.refine_stages,
-                 "Refinement stages after the first stationary stage (0 = the paper's single phase)" +
-                     both(std::to_string(d.refinement.stages), std::to_string(p.refinement.stages)));
+  app.add_option(
+      "--path-efficiency", o.path_efficiency,
+      "Convergence: a stationary window's net displacement over its path length must "
+      "be at most this (1 = straight travel, ~0.2 = jitter), unitless" +
+          both(num(d.convergence.max_path_efficiency), num(p.convergence.max_path_efficiency)));
+  app.add_option(
+      "--translation-tolerance", o.translation_tolerance,
+      "Convergence: a window whose steps each move the translation less than this "
+      "also ends a stage, scaled units" +
+          both(num(d.convergence.translation_tolerance), num(p.convergence.translation_tolerance)));
+  app.add_option(
+      "--rotation-tolerance", o.rotation_tolerance,
+      "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
+      "|d yaw|), rad" +
+          both(num(d.convergence.rotation_tolerance), num(p.convergence.rotation_tolerance)));
+  app.add_option(
+      "--refine-stages", o.refine_stages,
+      "Refinement stages after the first stationary stage (0 = the paper's single phase)" +
+          both(std::to_string(d.refinement.stages), std::to_string(p.refinement.stages)));
   app.add_option("--step-decay", o.step_decay,
                  "Refinement: step-size multiplier per stage, in (0, 1]" +
                      both(num(d.refinement.step_decay), num(p.refinement.step_decay)));
@@ -123,37 +132,48 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                  "Refinement: lower bound of d_max, in the unit of --max-distance-unit" +
                      both(num(d.refinement.min_distance.value) + " scaled",
                           num(p.refinement.min_distance.value) + " scaled"));
-  app.add_option("--average", o.average,
-                 "Return the mean of the last --window iterates once the final stage is "
-                 "stationary (true) or the last iterate (false)" +
-                     both(d.average_iterates ? "true" : "false", p.average_iterates ? "true" : "false"));
-  app.add_option("--scaling-origin", o.scaling_origin,
-                 "Origin of the scaled space and pivot of the rotation: 'corner' (the paper, points "
-                 "in [0, 1]) or 'center' (points in [-0.5, 0.5])" +
-                     both(d.scaling_origin == ScalingOrigin::center ? "center" : "corner",
-                          p.scaling_origin == ScalingOrigin::center ? "center" : "corner"))
+  app.add_option(
+      "--average", o.average,
+      "Return the mean of the last --window iterates once the final stage is "
+      "stationary (true) or the last iterate (false)" +
+          both(d.average_iterates ? "true" : "false", p.average_iterates ? "true" : "false"));
+  app.add_option(
+         "--scaling-origin", o.scaling_origin,
+         "Origin of the scaled space and pivot of the rotation: 'corner' (the paper, points "
+         "in [0, 1]) or 'center' (points in [-0.5, 0.5])" +
+             both(d.scaling_origin == ScalingOrigin::center ? "center" : "corner",
+                  p.scaling_origin == ScalingOrigin::center ? "center" : "corner"))
       ->check(CLI::IsMember({"corner", "center"}));
-  app.add_option("--evaluation-points", o.evaluation_points,
-                 "Source points (evenly strided) used for the final inlier ratio and RMSE, 0 = all" +
-                     both(std::to_string(d.evaluation_points), std::to_string(p.evaluation_points)));
+  app.add_option(
+      "--evaluation-points", o.evaluation_points,
+      "Source points (evenly strided) used for the final inlier ratio and RMSE, 0 = all" +
+          both(std::to_string(d.evaluation_points), std::to_string(p.evaluation_points)));
 }
 
 /// The settings of the chosen preset with every given option applied. Throws InvalidSettingsError.
 inline SgdSettings make_settings(const SettingsOptions& o) {
   const std::optional<OptimizerType> type =
       o.optimizer ? std::optional(optimizer_from_string(*o.optimizer)) : std::nullopt;
-  SgdSettings s = o.preset == "paper" ? SgdSettings::paper(type.value_or(OptimizerType::sgd))
-                                      : SgdSettings{};
+  SgdSettings s =
+      o.preset == "paper" ? SgdSettings::paper(type.value_or(OptimizerType::sgd)) : SgdSettings{};
   if (type && o.preset != "paper") {
     // Each step rule has its own natural step size: adaptive ones take a length per step, the
     // fixed step a gradient multiplier (the paper's 2), Gauss-Newton a fraction of a Newton step.
     s.optimizer.type = *type;
     switch (*type) {
-      case OptimizerType::sgd: s.optimizer.learning_rate = 2.0; break;
-      case OptimizerType::momentum: s.optimizer.learning_rate = 2.0 * (1.0 - s.optimizer.momentum); break;
-      case OptimizerType::gauss_newton: s.optimizer.learning_rate = 1.0; break;
+      case OptimizerType::sgd:
+        s.optimizer.learning_rate = 2.0;
+        break;
+      case OptimizerType::momentum:
+        s.optimizer.learning_rate = 2.0 * (1.0 - s.optimizer.momentum);
+        break;
+      case OptimizerType::gauss_newton:
+        s.optimizer.learning_rate = 1.0;
+        break;
       case OptimizerType::adam:
-      case OptimizerType::rmsprop: s.optimizer.learning_rate = SgdSettings{}.optimizer.learning_rate; break;
+      case OptimizerType::rmsprop:
+        s.optimizer.learning_rate = SgdSettings{}.optimizer.learning_rate;
+        break;
     }
   }
   const auto unit = o.max_distance_unit == "m" ? Distance::Unit::metres : Distance::Unit::scaled;
@@ -179,7 +199,8 @@ inline SgdSettings make_settings(const SettingsOptions& o) {
   if (o.average) s.average_iterates = *o.average;
   if (o.evaluation_points) s.evaluation_points = *o.evaluation_points;
   if (o.scaling_origin) {
-    s.scaling_origin = *o.scaling_origin == "corner" ? ScalingOrigin::lower_corner : ScalingOrigin::center;
+    s.scaling_origin =
+        *o.scaling_origin == "corner" ? ScalingOrigin::lower_corner : ScalingOrigin::center;
   }
   s.validate();
   return s;

@@ -37,8 +37,8 @@ void write_trace_csv(const std::string& path, const RegistrationResult& r) {
          "t00,t01,t02,t03,t10,t11,t12,t13,t20,t21,t22,t23\n";
   out << std::setprecision(10);
   for (const auto& e : r.trace) {
-    out << e.iteration << ',' << e.points_processed << ',' << e.step_size << ','
-        << e.max_distance_m << ',' << e.inliers << ',' << e.cost;
+    out << e.iteration << ',' << e.points_processed << ',' << e.step_size << ',' << e.max_distance_m
+        << ',' << e.inliers << ',' << e.cost;
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 4; ++j) out << ',' << e.T_reference_source(i, j);
     }
@@ -59,9 +59,9 @@ void run(const RegisterOptions& o) {
   const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json);
   const auto build_start = std::chrono::steady_clock::now();
   const ReferenceIndex reference(reference_cloud);
-  const double build_ms = std::chrono::duration<double, std::milli>(
-                              std::chrono::steady_clock::now() - build_start)
-                              .count();
+  const double build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
+          .count();
   const RegistrationResult result = align(source, reference, run_settings, T_init);
 
   if (!o.output.empty()) write_transform(o.output, result.T_reference_source);
@@ -94,8 +94,9 @@ void run(const RegisterOptions& o) {
   std::cout << "T_reference_source =\n" << format_transform(result.T_reference_source);
   std::cout << std::setprecision(4) << "converged: " << (result.converged ? "yes" : "no") << " ("
             << result.message << ")\n"
-            << "iterations: " << result.iterations << ", points processed: "
-            << result.points_processed << " (" << std::fixed << std::setprecision(2)
+            << "iterations: " << result.iterations
+            << ", points processed: " << result.points_processed << " (" << std::fixed
+            << std::setprecision(2)
             << static_cast<double>(result.points_processed) / static_cast<double>(source.size())
             << " passes over " << source.size() << " source points)\n"
             << "inliers: " << result.inliers << " of " << result.evaluated_points << " ("
@@ -105,12 +106,11 @@ void run(const RegisterOptions& o) {
             << "time: " << std::setprecision(1) << result.time_ms << " ms registration + "
             << build_ms << " ms kd-tree build\n";
   if (T_gt) {
-    std::cout << std::setprecision(4)
-              << "error vs ground truth: translation "
+    std::cout << std::setprecision(4) << "error vs ground truth: translation "
               << translation_error(result.T_reference_source, *T_gt) << " m, rotation "
-              << rotation_error_geodesic(result.T_reference_source, *T_gt) * 180.0 / std::numbers::pi
-              << " deg (geodesic), "
-              << rotation_error_euler_sum(result.T_reference_source, *T_gt)
+              << rotation_error_geodesic(result.T_reference_source, *T_gt) * 180.0 /
+                     std::numbers::pi
+              << " deg (geodesic), " << rotation_error_euler_sum(result.T_reference_source, *T_gt)
               << " rad (sum of |d roll|, |d pitch|, |d yaw|)\n";
   }
   if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
@@ -127,8 +127,9 @@ void add_register_command(CLI::App& app) {
       "register",
       "Register SOURCE to REFERENCE and print T_reference_source, the 4x4 transform that maps "
       "source points into the reference frame (p_ref = R p_src + t, metres).");
-  cmd->add_option("SOURCE", o->source, "Source cloud (the one that moves): .pcd .ply .bin .xyz "
-                                       ".txt .csv .vtk .f32")
+  cmd->add_option("SOURCE", o->source,
+                  "Source cloud (the one that moves): .pcd .ply .bin .xyz "
+                  ".txt .csv .vtk .f32")
       ->required();
   cmd->add_option("REFERENCE", o->reference, "Reference cloud (fixed), same formats")->required();
   cmd->add_option("--init", o->init,
@@ -144,8 +145,9 @@ void add_register_command(CLI::App& app) {
                   "Write the moved source cloud to this file (.ply, .pcd or .xyz)");
   cmd->add_option("--picture", o->picture,
                   "Write a PNG of the reference and the aligned source (top and side view)");
-  cmd->add_option("--trace", o->trace,
-                  "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");
+  cmd->add_option(
+      "--trace", o->trace,
+      "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });
 }

@@ -22,8 +22,9 @@ struct CloudAdaptor {
   }
 };
 
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CloudAdaptor>,
-                                                   CloudAdaptor, 3, std::uint32_t>;
+using KdTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CloudAdaptor>,
+                                        CloudAdaptor, 3, std::uint32_t>;
 
 // A single-nearest result set whose initial radius is the rejection distance, so branches
 // farther than d_max are never visited.
@@ -95,8 +96,12 @@ ReferenceIndex::~ReferenceIndex() = default;
 ReferenceIndex::ReferenceIndex(ReferenceIndex&&) noexcept = default;
 ReferenceIndex& ReferenceIndex::operator=(ReferenceIndex&&) noexcept = default;
 
-const PointCloud& ReferenceIndex::cloud() const noexcept { return impl_->cloud; }
-const BoundingBox& ReferenceIndex::bounding_box() const noexcept { return impl_->box; }
+const PointCloud& ReferenceIndex::cloud() const noexcept {
+  return impl_->cloud;
+}
+const BoundingBox& ReferenceIndex::bounding_box() const noexcept {
+  return impl_->box;
+}
 
 std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,
                                                 float max_squared_distance) const {

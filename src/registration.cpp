@@ -15,10 +15,14 @@ namespace sgdicp {
 
 std::string_view to_string(StopReason reason) {
   switch (reason) {
-    case StopReason::converged: return "converged";
-    case StopReason::max_iterations: return "max_iterations";
-    case StopReason::no_correspondences: return "no_correspondences";
-    case StopReason::diverged: return "diverged";
+    case StopReason::converged:
+      return "converged";
+    case StopReason::max_iterations:
+      return "max_iterations";
+    case StopReason::no_correspondences:
+      return "no_correspondences";
+    case StopReason::diverged:
+      return "diverged";
   }
   return "?";
 }
@@ -30,7 +34,8 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   s.optimizer.type = optimizer;
   // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
   // divides by the gradient's RMS), so alpha = 2 would jump twice across the unit cube; we use
-  // the original implementation's Adam step 0.1 scaled down by the measured factor (docs/design.md).
+  // the original implementation's Adam step 0.1 scaled down by the measured factor
+  // (docs/design.md).
   s.optimizer.learning_rate = optimizer == OptimizerType::sgd ? 2.0 : 0.01;
   s.scaling_origin = ScalingOrigin::lower_corner;
   s.refinement.stages = 0;
@@ -103,13 +108,15 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   settings.validate();
   check_source(source, settings.batch_size);
   if (!is_rigid_transform(T_init, 1e-4)) {
-    throw InvalidInputError("initial transform is not a finite rigid transform (rotation part "
-                            "must be orthonormal with determinant 1, last row 0 0 0 1)");
+    throw InvalidInputError(
+        "initial transform is not a finite rigid transform (rotation part "
+        "must be orthonormal with determinant 1, last row 0 0 0 1)");
   }
 
   BoundingBox source_box;
   source_box.extend(source);
-  const UnitCubeScaling scaling = UnitCubeScaling::from_boxes(source_box, reference.bounding_box(), settings.scaling_origin);
+  const UnitCubeScaling scaling =
+      UnitCubeScaling::from_boxes(source_box, reference.bounding_box(), settings.scaling_origin);
   const double k = scaling.scale();
   const Eigen::Vector3d o = scaling.offset();
 
@@ -166,8 +173,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
     }
     // Lines 9-10: one optimiser step on the mean cost over the kept pairs (eq. 6, 7).
     const PoseVector gradient = grad.gradient(settings.batch_size);
-    const PoseVector step =
-        optimizer.step(gradient, grad.hessian(settings.batch_size), lr_scale);
+    const PoseVector step = optimizer.step(gradient, grad.hessian(settings.batch_size), lr_scale);
     theta += step;
     result.iterations = it + 1;
     result.points_processed += batch.size();
@@ -244,11 +250,13 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
 
   // Final inlier statistics on an evenly strided sample of the source.
   const std::size_t n = source.size();
-  const std::size_t stride =
-      settings.evaluation_points == 0 ? 1 : std::max<std::size_t>(1, n / settings.evaluation_points);
+  const std::size_t stride = settings.evaluation_points == 0
+                                 ? 1
+                                 : std::max<std::size_t>(1, n / settings.evaluation_points);
   const Eigen::Matrix3f r = result.T_reference_source.topLeftCorner<3, 3>().cast<float>();
   const Eigen::Vector3f t = result.T_reference_source.topRightCorner<3, 1>().cast<float>();
-  const auto final_sq = static_cast<float>(result.final_max_distance_m * result.final_max_distance_m);
+  const auto final_sq =
+      static_cast<float>(result.final_max_distance_m * result.final_max_distance_m);
   double sum_sq = 0.0;
   for (std::size_t i = 0; i < n; i += stride) {
     ++result.evaluated_points;

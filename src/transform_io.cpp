@@ -1,7 +1,7 @@
 #include "sgdicp/transform_io.hpp"
 
-#include <cerrno>
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -54,10 +54,9 @@ Eigen::Matrix4d parse_transform(std::string_view text, std::string_view what) {
     const char* start = p + (c == '+' ? 1 : 0);
     const auto [next, ec] = std::from_chars(start, end, v);
     if (ec != std::errc() || next == start) {
-      throw FormatError(std::string(what) + ": line " + std::to_string(line) +
-                        ": expected a number, got '" +
-                        std::string(p, std::min<std::size_t>(12, static_cast<std::size_t>(end - p))) +
-                        "'");
+      throw FormatError(
+          std::string(what) + ": line " + std::to_string(line) + ": expected a number, got '" +
+          std::string(p, std::min<std::size_t>(12, static_cast<std::size_t>(end - p))) + "'");
     }
     if (!std::isfinite(v)) {
       throw FormatError(std::string(what) + ": line " + std::to_string(line) +
@@ -79,7 +78,8 @@ Eigen::Matrix4d parse_transform(std::string_view text, std::string_view what) {
                       ": not a rigid transform (rotation block not orthonormal with determinant "
                       "+1 within 1e-3, or last row not 0 0 0 1)");
   }
-  return orthonormalized(T);
+  // Already a rotation to machine precision: keep the bits (exact write/read round trip).
+  return is_rigid_transform(T, 1e-12) ? T : orthonormalized(T);
 }
 
 Eigen::Matrix4d read_transform(const std::filesystem::path& path) {
@@ -91,8 +91,8 @@ std::string format_transform(const Eigen::Matrix4d& T) {
   char buf[64];
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) {
-      const auto [ptr, ec] = std::to_chars(buf, buf + sizeof(buf), T(r, c),
-                                           std::chars_format::general, 17);
+      const auto [ptr, ec] =
+          std::to_chars(buf, buf + sizeof(buf), T(r, c), std::chars_format::general, 17);
       (void)ec;
       out.append(buf, ptr);
       out += c < 3 ? ' ' : '\n';

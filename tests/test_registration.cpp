@@ -31,14 +31,23 @@ PointCloud synthetic_scene(std::uint64_t seed, std::size_t n = 60000) {
     const float a = u(rng), b = u(rng);
     Eigen::Vector3f p;
     switch (i % 5) {
-      case 0: p = {6.0F * a, 4.0F * b, 0.0F}; break;                   // floor
-      case 1: p = {6.0F * a, 0.0F, 2.5F * b}; break;                   // wall along x
-      case 2: p = {0.0F, 4.0F * a, 2.5F * b}; break;                   // wall along y
-      case 3: p = {2.0F + 0.8F * a, 1.5F + 0.5F * b, 0.9F}; break;     // box top
-      default: {                                                        // ball
+      case 0:
+        p = {6.0F * a, 4.0F * b, 0.0F};
+        break;  // floor
+      case 1:
+        p = {6.0F * a, 0.0F, 2.5F * b};
+        break;  // wall along x
+      case 2:
+        p = {0.0F, 4.0F * a, 2.5F * b};
+        break;  // wall along y
+      case 3:
+        p = {2.0F + 0.8F * a, 1.5F + 0.5F * b, 0.9F};
+        break;    // box top
+      default: {  // ball
         const float th = 2.0F * std::numbers::pi_v<float> * a, ph = std::acos(2.0F * b - 1.0F);
-        p = Eigen::Vector3f(4.2F, 2.8F, 0.6F) +
-            0.5F * Eigen::Vector3f(std::sin(ph) * std::cos(th), std::sin(ph) * std::sin(th), std::cos(ph));
+        p = Eigen::Vector3f(4.2F, 2.8F, 0.6F) + 0.5F * Eigen::Vector3f(std::sin(ph) * std::cos(th),
+                                                                       std::sin(ph) * std::sin(th),
+                                                                       std::cos(ph));
       }
     }
     cloud.points.push_back(p + Eigen::Vector3f(noise(rng), noise(rng), noise(rng)));
@@ -65,7 +74,7 @@ std::filesystem::path shared(const std::string& relative) {
   return std::filesystem::path(SGDICP_SHARED_DATA) / relative;
 }
 
-#define SKIP_WITHOUT(path)                                                      \
+#define SKIP_WITHOUT(path) \
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << (path)
 
 // ---------------------------------------------------------------------------------------------
@@ -121,9 +130,12 @@ TEST(Synthetic, EveryOptimizerRecoversTheTransform) {
   const Eigen::Matrix4d T_gt = make_transform(0, 0, 8 * kDeg, {0.15, 0.1, 0});
   const PointCloud source = synthetic_scene(5);
   const PointCloud reference = transformed(synthetic_scene(6), T_gt);
-  for (const auto& [type, lr] : std::vector<std::pair<OptimizerType, double>>{
-           {OptimizerType::sgd, 2.0}, {OptimizerType::momentum, 0.2}, {OptimizerType::rmsprop, 0.01},
-           {OptimizerType::adam, 0.01}, {OptimizerType::gauss_newton, 1.0}}) {
+  for (const auto& [type, lr] :
+       std::vector<std::pair<OptimizerType, double>>{{OptimizerType::sgd, 2.0},
+                                                     {OptimizerType::momentum, 0.2},
+                                                     {OptimizerType::rmsprop, 0.01},
+                                                     {OptimizerType::adam, 0.01},
+                                                     {OptimizerType::gauss_newton, 1.0}}) {
     SgdSettings s;
     s.optimizer.type = type;
     s.optimizer.learning_rate = lr;
@@ -165,7 +177,8 @@ TEST(Synthetic, SameSeedSameBitsOtherSeedOtherPath) {
 
 TEST(Synthetic, TraceDescribesEveryIteration) {
   const PointCloud source = synthetic_scene(11);
-  const PointCloud reference = transformed(synthetic_scene(12), make_transform(0, 0, 0.1, {0.1, 0, 0}));
+  const PointCloud reference =
+      transformed(synthetic_scene(12), make_transform(0, 0, 0.1, {0.1, 0, 0}));
   SgdSettings s;
   s.record_trace = true;
   const RegistrationResult r = align(source, reference, s);
@@ -187,7 +200,8 @@ TEST(Synthetic, TraceDescribesEveryIteration) {
 
 TEST(Status, IterationLimitIsReportedAsNotConverged) {
   const PointCloud source = synthetic_scene(13);
-  const PointCloud reference = transformed(synthetic_scene(14), make_transform(0, 0, 0.3, {0.3, 0, 0}));
+  const PointCloud reference =
+      transformed(synthetic_scene(14), make_transform(0, 0, 0.3, {0.3, 0, 0}));
   SgdSettings s;
   s.max_iterations = 5;
   const RegistrationResult r = align(source, reference, s);
@@ -200,7 +214,8 @@ TEST(Status, IterationLimitIsReportedAsNotConverged) {
 TEST(Status, NoCorrespondencesIsReported) {
   const PointCloud source = synthetic_scene(15);
   // The reference is 100 m away and d_max is 0.1 m: no pair can ever be found.
-  const PointCloud reference = transformed(synthetic_scene(16), make_transform(0, 0, 0, {100, 0, 0}));
+  const PointCloud reference =
+      transformed(synthetic_scene(16), make_transform(0, 0, 0, {100, 0, 0}));
   SgdSettings s;
   s.max_correspondence_distance = Distance::metres(0.1);
   const RegistrationResult r = align(source, reference, s);
@@ -212,7 +227,8 @@ TEST(Status, NoCorrespondencesIsReported) {
 
 TEST(Status, DivergenceIsReported) {
   const PointCloud source = synthetic_scene(17);
-  const PointCloud reference = transformed(synthetic_scene(18), make_transform(0, 0, 0.2, {0.2, 0, 0}));
+  const PointCloud reference =
+      transformed(synthetic_scene(18), make_transform(0, 0, 0.2, {0.2, 0, 0}));
   SgdSettings s = SgdSettings::paper(OptimizerType::sgd);
   s.optimizer.learning_rate = 1e4;  // absurd but valid: the pose must blow up, and say so
   const RegistrationResult r = align(source, reference, s);
@@ -267,7 +283,8 @@ TEST(BadInput, AbsurdSettingsThrow) {
   expect_invalid([](SgdSettings& s) { s.optimizer.learning_rate = -1.0; });
   expect_invalid([](SgdSettings& s) { s.optimizer.learning_rate = std::nan(""); });
   expect_invalid([](SgdSettings& s) { s.max_correspondence_distance = Distance::metres(0.0); });
-  expect_invalid([](SgdSettings& s) { s.max_correspondence_distance = Distance::scaled(INFINITY); });
+  expect_invalid(
+      [](SgdSettings& s) { s.max_correspondence_distance = Distance::scaled(INFINITY); });
   expect_invalid([](SgdSettings& s) { s.optimizer.beta1 = 1.0; });
   expect_invalid([](SgdSettings& s) { s.convergence.window = 3; });
   expect_invalid([](SgdSettings& s) { s.convergence.chi2 = 0.0; });

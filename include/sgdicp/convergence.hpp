@@ -67,7 +67,8 @@ class ConvergenceMonitor {
     sum_outer_.noalias() += gradient * gradient.transpose();
     double rotation = 0.0;
     for (int a = 3; a < 6; ++a) rotation += std::abs(step[a]);
-    all_steps_small_ = all_steps_small_ && step.head<3>().norm() < settings_.translation_tolerance &&
+    all_steps_small_ = all_steps_small_ &&
+                       step.head<3>().norm() < settings_.translation_tolerance &&
                        rotation < settings_.rotation_tolerance;
     if (count_ < settings_.window) return false;
     const double n = static_cast<double>(count_);

@@ -34,9 +34,9 @@ enum class FileFormat {
 [[nodiscard]] FileFormat format_from_extension(const std::filesystem::path& path);
 
 struct ReadResult {
-  PointCloud cloud;                   ///< the finite points, in file order
-  std::size_t points_in_file = 0;     ///< points the file declares / contains
-  std::size_t non_finite_dropped = 0; ///< points dropped for a NaN or infinite coordinate
+  PointCloud cloud;                           ///< the finite points, in file order
+  std::size_t points_in_file = 0;             ///< points the file declares / contains
+  std::size_t non_finite_dropped = 0;         ///< points dropped for a NaN or infinite coordinate
   FileFormat format = FileFormat::automatic;  ///< the format that was read
 };
 

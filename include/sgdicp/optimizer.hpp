@@ -8,8 +8,8 @@
 #include <string>
 #include <string_view>
 
-#include "sgdicp/error.hpp"
 #include <Eigen/Cholesky>
+#include "sgdicp/error.hpp"
 
 #include "sgdicp/pose.hpp"
 
@@ -19,11 +19,16 @@ enum class OptimizerType { sgd, momentum, rmsprop, adam, gauss_newton };
 
 [[nodiscard]] inline std::string_view to_string(OptimizerType t) {
   switch (t) {
-    case OptimizerType::sgd: return "sgd";
-    case OptimizerType::momentum: return "momentum";
-    case OptimizerType::rmsprop: return "rmsprop";
-    case OptimizerType::adam: return "adam";
-    case OptimizerType::gauss_newton: return "gauss-newton";
+    case OptimizerType::sgd:
+      return "sgd";
+    case OptimizerType::momentum:
+      return "momentum";
+    case OptimizerType::rmsprop:
+      return "rmsprop";
+    case OptimizerType::adam:
+      return "adam";
+    case OptimizerType::gauss_newton:
+      return "gauss-newton";
   }
   return "?";
 }
@@ -42,11 +47,11 @@ struct OptimizerSettings {
   OptimizerType type = OptimizerType::sgd;
   /// alpha of eq. 3, in scaled units per unit gradient. The paper uses 2 with a fixed step.
   double learning_rate = 2.0;
-  double momentum = 0.9;       ///< momentum: velocity decay (heavy ball)
-  double beta1 = 0.9;          ///< Adam: decay of the mean of gradients
-  double beta2 = 0.999;        ///< Adam: decay of the mean of squared gradients
-  double rms_decay = 0.9;      ///< RMSProp: decay of the mean of squared gradients
-  double epsilon = 1e-8;       ///< Adam/RMSProp: added to the root mean square
+  double momentum = 0.9;   ///< momentum: velocity decay (heavy ball)
+  double beta1 = 0.9;      ///< Adam: decay of the mean of gradients
+  double beta2 = 0.999;    ///< Adam: decay of the mean of squared gradients
+  double rms_decay = 0.9;  ///< RMSProp: decay of the mean of squared gradients
+  double epsilon = 1e-8;   ///< Adam/RMSProp: added to the root mean square
   /// Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices.
   double hessian_decay = 0.9;
   /// Gauss-Newton: Levenberg damping, relative to the mean diagonal of the averaged matrix.
@@ -96,8 +101,7 @@ class Optimizer {
         velocity_ = settings_.momentum * velocity_ + g;
         return -alpha * velocity_;
       case OptimizerType::rmsprop:
-        second_ = settings_.rms_decay * second_ +
-                  (1.0 - settings_.rms_decay) * g.cwiseProduct(g);
+        second_ = settings_.rms_decay * second_ + (1.0 - settings_.rms_decay) * g.cwiseProduct(g);
         return -alpha * g.cwiseQuotient((second_.cwiseSqrt().array() + settings_.epsilon).matrix());
       case OptimizerType::adam: {
         first_ = settings_.beta1 * first_ + (1.0 - settings_.beta1) * g;
@@ -106,7 +110,8 @@ class Optimizer {
         const double c2 = 1.0 - std::pow(settings_.beta2, static_cast<double>(t_));
         const PoseVector m_hat = first_ / c1;
         const PoseVector v_hat = second_ / c2;
-        return -alpha * m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + settings_.epsilon).matrix());
+        return -alpha *
+               m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + settings_.epsilon).matrix());
       }
       case OptimizerType::gauss_newton: {
         // Averaging the curvature over batches keeps A well conditioned when one batch is

@@ -13,7 +13,7 @@ struct RegistrationPair {
   std::filesystem::path source;     ///< resolved against the pairs file's folder
   std::filesystem::path reference;  ///< resolved against the pairs file's folder
   Eigen::Matrix4d T_reference_source_gt = Eigen::Matrix4d::Identity();
-  std::size_t line = 0;             ///< line in the pairs file
+  std::size_t line = 0;  ///< line in the pairs file
 };
 
 /// Reads a pairs file. Throws IoError (cannot read) or FormatError (naming file and line).

@@ -12,7 +12,8 @@
 
 namespace sgdicp {
 
-/// Pose parameters (x, y, z, roll, pitch, yaw); translation in the unit of the points, angles in rad.
+/// Pose parameters (x, y, z, roll, pitch, yaw); translation in the unit of the points, angles in
+/// rad.
 using PoseVector = Eigen::Matrix<double, 6, 1>;
 
 /// Wraps an angle to (-pi, pi].
@@ -36,16 +37,16 @@ using PoseVector = Eigen::Matrix<double, 6, 1>;
 /// The (roll, pitch, yaw) of a rotation, with pitch in [-pi/2, pi/2]. At gimbal lock
 /// (|pitch| = pi/2) roll is set to 0 and yaw carries the remaining rotation.
 [[nodiscard]] inline Eigen::Vector3d rpy_from_rotation(const Eigen::Matrix3d& r) {
-  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
-  if (std::abs(r(2, 0)) > 1.0 - 1e-12) {
-    return {0.0, pitch, std::atan2(-r(0, 1), r(1, 1))};
-  }
+  // atan2 of (sin, cos) keeps full precision near the lock, where asin(-r20) does not.
+  const double cos_pitch = std::hypot(r(0, 0), r(1, 0));
+  const double pitch = std::atan2(-r(2, 0), cos_pitch);
+  if (cos_pitch < 1e-10) return {0.0, pitch, std::atan2(-r(0, 1), r(1, 1))};
   return {std::atan2(r(2, 1), r(2, 2)), pitch, std::atan2(r(1, 0), r(0, 0))};
 }
 
 /// dR/droll, dR/dpitch, dR/dyaw of rotation_from_rpy (the matrices of paper eq. 7).
 [[nodiscard]] inline std::array<Eigen::Matrix3d, 3> rotation_derivatives(double roll, double pitch,
-                                                                        double yaw) {
+                                                                         double yaw) {
   const double cr = std::cos(roll), sr = std::sin(roll);
   const double cp = std::cos(pitch), sp = std::sin(pitch);
   const double cy = std::cos(yaw), sy = std::sin(yaw);

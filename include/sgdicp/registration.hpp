@@ -88,30 +88,30 @@ enum class StopReason {
 
 struct TraceEntry {
   std::size_t iteration = 0;
-  std::size_t points_processed = 0;       ///< source points drawn so far
-  Eigen::Matrix4d T_reference_source;     ///< metric pose after this iteration
-  double step_size = 0.0;                 ///< effective learning rate of this iteration
-  double max_distance_m = 0.0;            ///< d_max used, metres
-  std::size_t inliers = 0;                ///< pairs kept in this mini-batch
-  double cost = 0.0;                      ///< mini-batch cost F, scaled units^2
+  std::size_t points_processed = 0;    ///< source points drawn so far
+  Eigen::Matrix4d T_reference_source;  ///< metric pose after this iteration
+  double step_size = 0.0;              ///< effective learning rate of this iteration
+  double max_distance_m = 0.0;         ///< d_max used, metres
+  std::size_t inliers = 0;             ///< pairs kept in this mini-batch
+  double cost = 0.0;                   ///< mini-batch cost F, scaled units^2
 };
 
 struct RegistrationResult {
   Eigen::Matrix4d T_reference_source = Eigen::Matrix4d::Identity();
   bool converged = false;
   StopReason stop_reason = StopReason::max_iterations;
-  std::string message;                  ///< one line on why it stopped
+  std::string message;  ///< one line on why it stopped
   std::size_t iterations = 0;
-  std::size_t points_processed = 0;     ///< source points drawn (iterations * batch size)
-  std::size_t stages = 0;               ///< convergence stages completed
-  std::size_t evaluated_points = 0;     ///< source points in the final inlier statistics
-  std::size_t inliers = 0;              ///< of those, with a reference point within d_max
-  double inlier_ratio = 0.0;            ///< inliers / evaluated_points
-  double inlier_rmse_m = 0.0;           ///< RMS distance of the inliers, metres
-  double final_max_distance_m = 0.0;    ///< d_max at the end (after refinement), metres
-  double scale_m = 0.0;                 ///< metres per scaled unit
-  double time_ms = 0.0;                 ///< wall time of the registration (not of the index build)
-  std::vector<TraceEntry> trace;        ///< per iteration, when record_trace is set
+  std::size_t points_processed = 0;   ///< source points drawn (iterations * batch size)
+  std::size_t stages = 0;             ///< convergence stages completed
+  std::size_t evaluated_points = 0;   ///< source points in the final inlier statistics
+  std::size_t inliers = 0;            ///< of those, with a reference point within d_max
+  double inlier_ratio = 0.0;          ///< inliers / evaluated_points
+  double inlier_rmse_m = 0.0;         ///< RMS distance of the inliers, metres
+  double final_max_distance_m = 0.0;  ///< d_max at the end (after refinement), metres
+  double scale_m = 0.0;               ///< metres per scaled unit
+  double time_ms = 0.0;               ///< wall time of the registration (not of the index build)
+  std::vector<TraceEntry> trace;      ///< per iteration, when record_trace is set
 };
 
 /// Registers source to the reference held by an index (built once, reusable, thread-safe).

@@ -10,8 +10,8 @@
 namespace sgdicp {
 
 struct RenderSettings {
-  int width = 1200;   ///< pixels of the whole picture (both views side by side)
-  int height = 600;   ///< pixels
+  int width = 1200;                 ///< pixels of the whole picture (both views side by side)
+  int height = 600;                 ///< pixels
   std::size_t max_points = 200000;  ///< per cloud; larger clouds are drawn strided
 };
 

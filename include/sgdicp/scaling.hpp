@@ -30,8 +30,9 @@ class UnitCubeScaling {
     if (!(side > 0.0) || !std::isfinite(side)) {
       throw InvalidInputError("cannot scale: the clouds have zero or non-finite extent");
     }
-    const Eigen::Vector3d offset =
-        origin == ScalingOrigin::lower_corner ? joint.min : Eigen::Vector3d(0.5 * (joint.min + joint.max));
+    const Eigen::Vector3d offset = origin == ScalingOrigin::lower_corner
+                                       ? joint.min
+                                       : Eigen::Vector3d(0.5 * (joint.min + joint.max));
     return UnitCubeScaling(offset, side);
   }
 

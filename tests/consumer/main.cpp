@@ -15,8 +15,8 @@ int main() {
   sgdicp::PointCloud reference = source;
   for (auto& p : reference.points) p += Eigen::Vector3f(0.012F, -0.009F, 0.006F);
   const sgdicp::RegistrationResult r = sgdicp::align(source, reference);
-  const double error = (r.T_reference_source.topRightCorner<3, 1>() -
-                        Eigen::Vector3d(0.012, -0.009, 0.006)).norm();
+  const double error =
+      (r.T_reference_source.topRightCorner<3, 1>() - Eigen::Vector3d(0.012, -0.009, 0.006)).norm();
   std::printf("converged=%d translation error=%.3g m\n", r.converged ? 1 : 0, error);
   return r.converged && error < 0.005 ? 0 : 1;
 }

@@ -1,0 +1,437 @@
+#!/usr/bin/env bash
+# End-to-end tests of the sgdicp command-line tool. Run by CTest with
+#   SGDICP_BIN          the sgdicp executable
+#   SGDICP_SHARED_DATA  the shared data folder (checks on real data are skipped when absent)
+#   SGDICP_DEMO_DATA    the demo data folder (optional)
+# Prints one line per check and a final "N passed, M failed"; exits 1 on any failure.
+set -u
+
+BIN="${SGDICP_BIN:-}"
+SHARED="${SGDICP_SHARED_DATA:-}"
+passed=0
+failed=0
+skipped=0
+
+pass() {
+  echo "PASS: $1"
+  passed=$((passed + 1))
+}
+fail() {
+  echo "FAIL: $1"
+  failed=$((failed + 1))
+}
+skip() {
+  echo "SKIP: $1"
+  skipped=$((skipped + 1))
+}
+finish() {
+  echo "${passed} passed, ${failed} failed"
+  [ "$failed" -eq 0 ] || exit 1
+  exit 0
+}
+
+if [ -z "$BIN" ] || [ ! -x "$BIN" ]; then
+  fail "SGDICP_BIN ('${BIN}') is not an executable"
+  finish
+fi
+
+tmp="$(mktemp -d "${TMPDIR:-/tmp}/sgdicp_cli_test.XXXXXX")" || {
+  fail "mktemp -d"
+  finish
+}
+trap 'rm -rf "$tmp"' EXIT
+
+# Runs the tool with the given arguments; stdout in $tmp/out, stderr in $tmp/err, status in $rc.
+rc=0
+run() {
+  "$BIN" "$@" >"$tmp/out" 2>"$tmp/err"
+  rc=$?
+}
+
+# expect_ok NAME ARGS...: exit status 0.
+expect_ok() {
+  local name="$1"
+  shift
+  run "$@"
+  if [ "$rc" -eq 0 ]; then
+    pass "$name"
+  else
+    fail "$name (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+}
+
+# expect_error NAME REGEX ARGS...: non-zero exit (not a crash) and stderr matching REGEX
+# (extended, case-insensitive).
+expect_error() {
+  local name="$1" regex="$2"
+  shift 2
+  run "$@"
+  if [ "$rc" -eq 0 ]; then
+    fail "$name: exit status 0, expected an error"
+  elif [ "$rc" -ge 128 ]; then
+    fail "$name: killed by a signal (exit $rc): $(head -c 400 "$tmp/err")"
+  elif ! grep -Eiq -- "$regex" "$tmp/err"; then
+    fail "$name: stderr does not match /$regex/: $(head -c 400 "$tmp/err")"
+  else
+    pass "$name (exit $rc: $(head -n 1 "$tmp/err" | head -c 160))"
+  fi
+}
+
+# True when FILE holds exactly 4 lines of 4 finite numbers whose last line is 0 0 0 1.
+is_4x4_matrix() {
+  awk '
+    NF == 0 { next }
+    {
+      rows++
+      if (NF != 4) bad = 1
+      for (i = 1; i <= NF; i++) if ($i !~ /^[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$/) bad = 1
+      if (rows == 4 && ($1 + 0 != 0 || $2 + 0 != 0 || $3 + 0 != 0 || $4 + 0 != 1)) bad = 1
+    }
+    END { exit (bad || rows != 4) }' "$1"
+}
+
+# The option entries ("  -x,--name ARG  description ...", continuation lines joined) of a
+# CLI11 help text, one per line.
+option_entries() {
+  awk '
+    /^Options:/ { in_options = 1; next }
+    /^[A-Za-z]/ { in_options = 0 }
+    in_options && /^ +-/ { if (entry != "") print entry; entry = $0; next }
+    in_options && /^ +[^ -]/ && entry != "" { entry = entry " " $0; next }
+    END { if (entry != "") print entry }' "$1"
+}
+
+# check_help NAME HELP_FILE REQUIRED_OPTIONS...: every option has "[default:" in its help
+# (except flags and output files, which have nothing to default to) and every required option
+# appears.
+check_help() {
+  local name="$1" file="$2"
+  shift 2
+  local entries="$tmp/entries"
+  option_entries "$file" >"$entries"
+  if [ ! -s "$entries" ]; then
+    fail "$name: no options found in the help text"
+    return
+  fi
+  local missing_default
+  missing_default="$(grep -Ev -- '^ +(-h,)?--help|^ +--version|^ +--json|^ +(-o,)?--output|^ +--aligned|^ +--picture|^ +--trace|^ +--ground-truth|^ +--csv' "$entries" |
+    grep -Fv '[default:' | sed -E 's/^ +//; s/ .*//' | tr '\n' ' ')"
+  if [ -n "$missing_default" ]; then
+    fail "$name: options without '[default:' in their help: $missing_default"
+  else
+    pass "$name: every option with a default shows it ($(wc -l <"$entries") options)"
+  fi
+  local opt absent=""
+  for opt in "$@"; do
+    grep -Eq -- "(^|[ ,])${opt}( |,|\$)" "$entries" || absent="$absent $opt"
+  done
+  if [ -n "$absent" ]; then
+    fail "$name: options missing from the help:$absent"
+  else
+    pass "$name: mentions $*"
+  fi
+}
+
+# The help entry of one option.
+entry_of() {
+  option_entries "$1" | grep -E -- "(^|[ ,])$2( |,|\$)"
+}
+
+have_python=0
+if command -v python3 >/dev/null 2>&1 && python3 -c 'import json' >/dev/null 2>&1; then
+  have_python=1
+fi
+
+# --- help -------------------------------------------------------------------------------------
+SETTINGS_OPTIONS=(--preset --optimizer --learning-rate --batch-size --max-distance
+  --max-distance-unit --max-iterations --seed)
+
+run --help
+if [ "$rc" -eq 0 ] && grep -q 'register' "$tmp/out" && grep -q 'bench' "$tmp/out"; then
+  pass "sgdicp --help exits 0 and lists register and bench"
+else
+  fail "sgdicp --help (exit $rc)"
+fi
+expect_ok "sgdicp --version" --version
+
+run register --help
+if [ "$rc" -eq 0 ]; then
+  pass "sgdicp register --help exits 0"
+  cp "$tmp/out" "$tmp/register_help"
+  check_help "register --help" "$tmp/register_help" --init --json --output --aligned \
+    "${SETTINGS_OPTIONS[@]}"
+  # Units of the settings that have one.
+  for spec in "--max-distance:scaled" "--learning-rate:scaled" "--translation-tolerance:scaled" \
+    "--rotation-tolerance:rad" "--max-distance-unit:m"; do
+    opt="${spec%%:*}"
+    unit="${spec#*:}"
+    if entry_of "$tmp/register_help" "$opt" | grep -qw -- "$unit"; then
+      pass "register --help: $opt states its unit ($unit)"
+    else
+      fail "register --help: $opt does not state its unit ($unit)"
+    fi
+  done
+else
+  fail "sgdicp register --help (exit $rc)"
+fi
+
+run bench --help
+if [ "$rc" -eq 0 ]; then
+  pass "sgdicp bench --help exits 0"
+  cp "$tmp/out" "$tmp/bench_help"
+  check_help "bench --help" "$tmp/bench_help" --perturb --csv --repeat "${SETTINGS_OPTIONS[@]}"
+else
+  fail "sgdicp bench --help (exit $rc)"
+fi
+
+expect_error "no subcommand" 'subcommand|required|help'
+
+# --- synthetic clouds (no shared data needed) ---------------------------------------------------
+# A deterministic, non-symmetric cloud of 800 points in about 1 m, and a copy moved by d.
+awk 'BEGIN {
+  for (i = 0; i < 800; i++) {
+    u = (i * 0.6180339887) % 1; v = (i * 0.7548776662) % 1; w = (i * 0.5698402910) % 1
+    printf "%.6f %.6f %.6f\n", u, 0.7 * v + 0.1 * sin(6 * u), 0.4 * w + 0.2 * u * u
+  }
+}' >"$tmp/ref.xyz"
+awk '{ printf "%.6f %.6f %.6f\n", $1 + 0.02, $2 - 0.01, $3 + 0.015 }' "$tmp/ref.xyz" >"$tmp/moved.xyz"
+printf '0 0 0\n1 0 0\n0 1 0\n' >"$tmp/three.xyz"
+printf 'nan nan nan\nnan 1 2\n1 nan 2\n' >"$tmp/nan.xyz"
+printf 'hello world foo\nbar baz qux\n1 2\n' >"$tmp/garbage.xyz"
+: >"$tmp/empty.xyz"
+: >"$tmp/empty.pcd"
+printf '0123456789' >"$tmp/truncated.bin"
+mkdir -p "$tmp/folder.pcd"
+REF="$tmp/ref.xyz"
+MOVED="$tmp/moved.xyz"
+IDENTITY12="1 0 0 0 0 1 0 0 0 0 1 0"
+
+run register "$MOVED" "$REF" --output "$tmp/synthetic_T.txt"
+if [ "$rc" -eq 0 ] && is_4x4_matrix "$tmp/synthetic_T.txt"; then
+  # source = reference + d, so T_reference_source translates by -d.
+  if awk 'NR == 1 { a = $4 + 0.02 } NR == 2 { b = $4 - 0.01 } NR == 3 { c = $4 + 0.015 }
+          END { e = sqrt(a * a + b * b + c * c); exit !(e < 2e-3) }' "$tmp/synthetic_T.txt"; then
+    pass "register recovers a known 2.7 cm shift of a synthetic cloud"
+  else
+    fail "register on a synthetic shift: translation off: $(tr '\n' ' ' <"$tmp/synthetic_T.txt")"
+  fi
+else
+  fail "register on synthetic clouds (exit $rc): $(head -c 400 "$tmp/err")"
+fi
+
+# Same inputs and seed: the same bits.
+run register "$MOVED" "$REF" --output "$tmp/synthetic_T2.txt"
+if [ "$rc" -eq 0 ] && cmp -s "$tmp/synthetic_T.txt" "$tmp/synthetic_T2.txt"; then
+  pass "register is reproducible (same seed, identical output file)"
+else
+  fail "register is not reproducible with the same seed"
+fi
+expect_ok "register --seed 7 runs" register "$MOVED" "$REF" --seed 7
+
+# --- error handling ------------------------------------------------------------------------------
+expect_error "missing source file" 'no such|cannot open|not found|missing' \
+  register "$tmp/does_not_exist.pcd" "$REF"
+expect_error "missing reference file" 'no such|cannot open|not found|missing' \
+  register "$REF" "$tmp/does_not_exist.xyz"
+expect_error "a directory as source file" 'director' register "$tmp/folder.pcd" "$REF"
+expect_error "an empty .xyz file" 'empty|no (finite )?points' register "$tmp/empty.xyz" "$REF"
+expect_error "an empty .pcd file" 'empty|header|truncated' register "$tmp/empty.pcd" "$REF"
+expect_error "a truncated .bin (10 bytes)" 'truncat|multiple|size' \
+  register "$tmp/truncated.bin" "$REF"
+expect_error "a garbage .xyz" 'number|line' register "$tmp/garbage.xyz" "$REF"
+cp "$REF" "$tmp/cloud.abc"
+expect_error "an unknown file extension" 'extension|format' register "$tmp/cloud.abc" "$REF"
+expect_error "--batch-size 0" 'batch' register "$MOVED" "$REF" --batch-size 0
+expect_error "--learning-rate -1" 'learning' register "$MOVED" "$REF" --learning-rate -1
+expect_error "--max-distance 0" 'distance' register "$MOVED" "$REF" --max-distance 0
+expect_error "--max-distance-unit parsec" 'max-distance-unit|parsec' \
+  register "$MOVED" "$REF" --max-distance-unit parsec
+expect_error "--optimizer nonsense" 'optimizer|nonsense' register "$MOVED" "$REF" --optimizer nonsense
+expect_error "--init with 5 numbers" '12|16|numbers' register "$MOVED" "$REF" --init "1 2 3 4 5"
+expect_error "--init with a non-rigid matrix" 'rigid' \
+  register "$MOVED" "$REF" --init "2 0 0 0 0 2 0 0 0 0 2 0"
+expect_error "--init with a NaN" 'finite|nan' \
+  register "$MOVED" "$REF" --init "1 0 0 nan 0 1 0 0 0 0 1 0"
+expect_error "--init with a missing file" 'no such|cannot open|not found' \
+  register "$MOVED" "$REF" --init no_such_transform_file.txt
+# A mistyped path with digits must say the file is missing, not fail to parse it as numbers.
+expect_error "--init with a missing file whose name has digits" 'no such|cannot open|not found' \
+  register "$MOVED" "$REF" --init "poses/T_001.txt"
+expect_error "an unknown option" 'bogus' register "$MOVED" "$REF" --bogus-option
+expect_error "a missing positional argument" 'REFERENCE|required' register "$MOVED"
+expect_error "a source with fewer points than --batch-size" 'fewer|batch' \
+  register "$tmp/three.xyz" "$REF"
+expect_error "a source of only NaN points" 'finite|nan|no points|empty' register "$tmp/nan.xyz" "$REF"
+expect_error "a reference of only NaN points" 'finite|nan|no points|empty' \
+  register "$MOVED" "$tmp/nan.xyz"
+expect_error "--output into a missing folder" 'cannot|no such|open|write' \
+  register "$MOVED" "$REF" --output "$tmp/no/such/folder/T.txt"
+
+# --init inline and from a file, on synthetic data.
+expect_ok "--init with 12 inline numbers" register "$MOVED" "$REF" --init "$IDENTITY12"
+expect_ok "--init with 16 inline numbers, commas" register "$MOVED" "$REF" \
+  --init "1,0,0,-0.02, 0,1,0,0.01, 0,0,1,-0.015, 0,0,0,1"
+printf '# a 3x4 transform\n1 0 0 -0.02\n0 1 0 0.01\n0 0 1 -0.015\n' >"$tmp/init.txt"
+expect_ok "--init with a 3x4 file" register "$MOVED" "$REF" --init "$tmp/init.txt"
+
+# --- the bunny pair from the shared data ---------------------------------------------------------
+BUNNY_SRC="${SHARED}/pcl_bunny/bun4.pcd"
+BUNNY_REF="${SHARED}/pcl_bunny/bun0.pcd"
+BUNNY_PAIRS="${SHARED}/pairs/pcl_bunny.txt"
+if [ -z "$SHARED" ] || [ ! -f "$BUNNY_SRC" ] || [ ! -f "$BUNNY_REF" ] || [ ! -f "$BUNNY_PAIRS" ]; then
+  skip "shared data checks: ${SHARED:-SGDICP_SHARED_DATA unset} has no pcl_bunny data"
+else
+  run register "$BUNNY_SRC" "$BUNNY_REF" --json
+  if [ "$rc" -ne 0 ]; then
+    fail "register --json on the bunny (exit $rc): $(head -c 400 "$tmp/err")"
+  else
+    pass "register --json on the bunny exits 0"
+    cp "$tmp/out" "$tmp/bunny.json"
+    if [ "$have_python" -eq 1 ]; then
+      if python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+t = d["transform"]
+assert isinstance(t, list) and len(t) == 4, "transform is not 4 rows"
+assert all(isinstance(r, list) and len(r) == 4 for r in t), "transform rows are not 4 long"
+assert all(isinstance(x, (int, float)) for r in t for x in r), "transform has non-numbers"
+assert t[3] == [0, 0, 0, 1], "last row is not 0 0 0 1"
+R = [r[:3] for r in t[:3]]
+for i in range(3):
+    for j in range(3):
+        dot = sum(R[k][i] * R[k][j] for k in range(3))
+        assert abs(dot - (1.0 if i == j else 0.0)) < 1e-6, "rotation block not orthonormal"
+assert isinstance(d["converged"], bool), "converged is not a bool"
+assert isinstance(d["iterations"], int) and d["iterations"] > 0, "iterations"
+assert isinstance(d["points_processed"], int), "points_processed"
+assert d["points_processed"] >= d["iterations"], "points_processed < iterations"
+assert isinstance(d["time_ms"], (int, float)) and d["time_ms"] >= 0, "time_ms"
+' <"$tmp/bunny.json" 2>"$tmp/py_err"; then
+        pass "register --json: transform 4x4, converged, iterations, points_processed, time_ms"
+      else
+        fail "register --json output: $(tail -n 1 "$tmp/py_err")"
+      fi
+    else
+      skip "JSON parse check (python3 missing)"
+    fi
+  fi
+
+  # Against the ground truth of the pairs file (loose: this is a smoke test, not a benchmark).
+  gt="$(grep -v '^#' "$BUNNY_PAIRS" | grep -m1 'bun4' | cut -d' ' -f3-)"
+  if [ "$have_python" -eq 1 ] && [ -n "$gt" ]; then
+    run register "$BUNNY_SRC" "$BUNNY_REF" --json --ground-truth "$gt"
+    if [ "$rc" -eq 0 ] && python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+assert d["translation_error_m"] < 0.01, d["translation_error_m"]
+assert d["rotation_error_geodesic_deg"] < 5.0, d["rotation_error_geodesic_deg"]
+' <"$tmp/out" 2>"$tmp/py_err"; then
+      pass "register on the bunny lands within 1 cm / 5 deg of the ground truth"
+    else
+      fail "register on the bunny vs ground truth (exit $rc): $(tail -n 1 "$tmp/py_err")"
+    fi
+  fi
+
+  run register "$BUNNY_SRC" "$BUNNY_REF" --output "$tmp/bunny_T.txt"
+  if [ "$rc" -eq 0 ] && is_4x4_matrix "$tmp/bunny_T.txt"; then
+    pass "--output writes a 4x4 matrix"
+  else
+    fail "--output (exit $rc): $(head -c 300 "$tmp/bunny_T.txt" 2>/dev/null)"
+  fi
+  # The text output prints the same matrix.
+  if [ "$rc" -eq 0 ] && grep -qF "$(head -n 1 "$tmp/bunny_T.txt")" "$tmp/out"; then
+    pass "the printed transform equals the --output file"
+  else
+    fail "the printed transform differs from the --output file"
+  fi
+
+  run register "$BUNNY_SRC" "$BUNNY_REF" --aligned "$tmp/aligned.ply"
+  if [ "$rc" -eq 0 ] && [ -s "$tmp/aligned.ply" ]; then
+    pass "--aligned writes a file"
+    if [ "$have_python" -eq 1 ]; then
+      run register "$tmp/aligned.ply" "$BUNNY_REF" --max-iterations 1 --json
+      if [ "$rc" -eq 0 ] && python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+assert d["source_points"] == 361, d["source_points"]
+' <"$tmp/out" 2>"$tmp/py_err"; then
+        pass "the --aligned cloud reads back as a source with all 361 points"
+      else
+        fail "the --aligned cloud does not read back (exit $rc): $(head -c 300 "$tmp/err") $(tail -n 1 "$tmp/py_err")"
+      fi
+    else
+      expect_ok "the --aligned cloud reads back as a source" \
+        register "$tmp/aligned.ply" "$BUNNY_REF" --max-iterations 1
+    fi
+  else
+    fail "--aligned (exit $rc): $(head -c 300 "$tmp/err")"
+  fi
+  run register "$BUNNY_SRC" "$BUNNY_REF" --aligned "$tmp/aligned.xyz" --max-iterations 5
+  if [ "$rc" -eq 0 ] && [ "$(grep -c . "$tmp/aligned.xyz")" -ge 361 ]; then
+    pass "--aligned .xyz writes every point"
+  else
+    fail "--aligned .xyz (exit $rc)"
+  fi
+
+  expect_ok "--init with 12 inline numbers (bunny)" \
+    register "$BUNNY_SRC" "$BUNNY_REF" --init "$IDENTITY12" --max-iterations 50
+  expect_ok "--init with a file written by --output" \
+    register "$BUNNY_SRC" "$BUNNY_REF" --init "$tmp/bunny_T.txt" --max-iterations 50
+  expect_error "bunny with --batch-size 1000 > 361 points" 'fewer|batch' \
+    register "$BUNNY_SRC" "$BUNNY_REF" --batch-size 1000
+
+  # bench
+  run bench "$BUNNY_PAIRS" --csv "$tmp/bench.csv"
+  if [ "$rc" -eq 0 ] && grep -qi 'success' "$tmp/out"; then
+    pass "bench prints a summary with the success rate"
+  else
+    fail "bench (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+  if [ -f "$tmp/bench.csv" ] && [ "$(grep -c . "$tmp/bench.csv")" -eq 2 ] &&
+    head -n 1 "$tmp/bench.csv" | grep -q 'translation_error' &&
+    awk -F, 'NR == 1 { n = NF } NR == 2 { exit (NF != n) }' "$tmp/bench.csv"; then
+    pass "bench --csv writes a header and one row of the same width"
+  else
+    fail "bench --csv: $(head -c 600 "$tmp/bench.csv" 2>/dev/null)"
+  fi
+
+  run bench "$BUNNY_PAIRS" --perturb 0.01,0.05,7 --csv "$tmp/perturb.csv"
+  if [ "$rc" -eq 0 ] && grep -qi 'success' "$tmp/out"; then
+    pass "bench --perturb 0.01,0.05,7 runs"
+  else
+    fail "bench --perturb (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+  # The initial error is exactly the requested perturbation (0.01 m, 0.05 rad = 2.8648 deg).
+  if awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) col[$i] = i }
+      NR == 2 { t = $col["initial_translation_error_m"]; r = $col["initial_rotation_error_deg"]
+                ok = (t - 0.01)^2 < 1e-12 && (r - 2.864788976)^2 < 1e-8 }
+      END { exit !ok }' "$tmp/perturb.csv" 2>/dev/null; then
+    pass "bench --perturb starts exactly 0.01 m / 0.05 rad from the ground truth"
+  else
+    fail "bench --perturb initial error: $(tail -n 1 "$tmp/perturb.csv" 2>/dev/null)"
+  fi
+  expect_error "bench --perturb with one number" 'perturb' bench "$BUNNY_PAIRS" --perturb 0.01
+fi
+
+# bench errors that need no shared data.
+printf 'missing_source.pcd %s %s\n' "$REF" "$IDENTITY12" >"$tmp/missing_cloud_pairs.txt"
+expect_error "bench with a pairs file naming a missing cloud" 'missing_source|no such|cannot open' \
+  bench "$tmp/missing_cloud_pairs.txt"
+printf 'a.xyz b.xyz 1 0 0 0 0 1 0 0 0 0 1\n' >"$tmp/bad_pairs.txt"
+expect_error "bench with a malformed pairs file" 'line 1' bench "$tmp/bad_pairs.txt"
+expect_error "bench with a missing pairs file" 'no such|cannot open' bench "$tmp/no_pairs.txt"
+# A pairs file with relative paths, resolved against its own folder.
+mkdir -p "$tmp/pairs_dir"
+cp "$REF" "$tmp/ref_copy.xyz"
+cp "$MOVED" "$tmp/pairs_dir/moved_copy.xyz"
+printf '# synthetic\nmoved_copy.xyz ../ref_copy.xyz 1 0 0 -0.02 0 1 0 0.01 0 0 1 -0.015\n' \
+  >"$tmp/pairs_dir/pairs.txt"
+run bench "$tmp/pairs_dir/pairs.txt" --csv "$tmp/synthetic_bench.csv"
+if [ "$rc" -eq 0 ] && [ "$(grep -c . "$tmp/synthetic_bench.csv")" -eq 2 ]; then
+  pass "bench resolves relative paths against the pairs file's folder"
+else
+  fail "bench on a relative-path pairs file (exit $rc): $(head -c 400 "$tmp/err")"
+fi
+
+echo "(${skipped} skipped)"
+finish

@@ -1,0 +1,284 @@
+// Tests of the reference kd-tree (nearest_neighbor.hpp) against brute force.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <random>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "sgdicp/error.hpp"
+#include "sgdicp/nearest_neighbor.hpp"
+
+namespace {
+
+using sgdicp::Neighbor;
+using sgdicp::PointCloud;
+using sgdicp::ReferenceIndex;
+
+float uniform(std::mt19937_64& rng, double lo, double hi) {
+  return static_cast<float>(lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53);
+}
+
+PointCloud random_cloud(std::mt19937_64& rng, std::size_t n, double half_width) {
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    c.points.emplace_back(uniform(rng, -half_width, half_width),
+                          uniform(rng, -half_width, half_width),
+                          uniform(rng, -half_width, half_width));
+  }
+  return c;
+}
+
+// The squared distance evaluated exactly as the kd-tree does (float, x then y then z), so that
+// distances can be compared for equality.
+float squared_distance(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+  float sum = 0.0F;
+  for (int k = 0; k < 3; ++k) {
+    const float d = a[k] - b[k];
+    sum += d * d;
+  }
+  return sum;
+}
+
+struct Brute {
+  std::uint32_t index = 0;
+  float squared_distance = std::numeric_limits<float>::infinity();
+  int ties = 0;  // other points at exactly the same distance
+};
+
+Brute brute_force(const PointCloud& cloud, const Eigen::Vector3f& q) {
+  Brute best;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const float d = squared_distance(cloud.points[i], q);
+    if (d < best.squared_distance) {
+      best = {static_cast<std::uint32_t>(i), d, 0};
+    } else if (d == best.squared_distance) {
+      ++best.ties;
+    }
+  }
+  return best;
+}
+
+class NearestNeighborTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::mt19937_64 rng(31);
+    cloud_ = random_cloud(rng, 5000, 10.0);
+    // Queries inside and around the cloud, some far outside it.
+    queries_ = random_cloud(rng, 1800, 12.0).points;
+    const PointCloud far = random_cloud(rng, 200, 100.0);
+    queries_.insert(queries_.end(), far.points.begin(), far.points.end());
+    // Some queries exactly on reference points.
+    for (std::size_t i = 0; i < 50; ++i) queries_.push_back(cloud_.points[i * 97]);
+    for (const auto& q : queries_) expected_.push_back(brute_force(cloud_, q));
+  }
+
+  void check_all(const ReferenceIndex& index) const {
+    for (std::size_t i = 0; i < queries_.size(); ++i) {
+      const std::optional<Neighbor> n = index.nearest(queries_[i]);
+      ASSERT_TRUE(n.has_value()) << "query " << i;
+      const Brute& b = expected_[i];
+      ASSERT_EQ(n->squared_distance, b.squared_distance) << "query " << i;
+      ASSERT_LT(n->index, cloud_.size());
+      ASSERT_EQ(squared_distance(cloud_.points[n->index], queries_[i]), b.squared_distance);
+      if (b.ties == 0) {
+        ASSERT_EQ(n->index, b.index) << "query " << i;
+      }
+    }
+  }
+
+  PointCloud cloud_;
+  std::vector<Eigen::Vector3f> queries_;
+  std::vector<Brute> expected_;
+};
+
+TEST_F(NearestNeighborTest, EqualsBruteForce) {
+  const ReferenceIndex index(cloud_);
+  EXPECT_EQ(index.size(), cloud_.size());
+  check_all(index);
+  // Queries on reference points find them at distance 0.
+  for (std::size_t i = 0; i < 50; ++i) {
+    const auto n = index.nearest(cloud_.points[i * 97]);
+    ASSERT_TRUE(n);
+    EXPECT_EQ(n->squared_distance, 0.0F);
+  }
+}
+
+TEST_F(NearestNeighborTest, EqualsBruteForceForOtherLeafSizes) {
+  for (const std::size_t leaf : {1U, 3U, 64U, 10000U}) {
+    SCOPED_TRACE(leaf);
+    const ReferenceIndex index(cloud_, sgdicp::KdTreeSettings{leaf});
+    check_all(index);
+  }
+  EXPECT_THROW(ReferenceIndex(cloud_, sgdicp::KdTreeSettings{0}), sgdicp::InvalidSettingsError);
+}
+
+TEST_F(NearestNeighborTest, MaxDistanceBound) {
+  const ReferenceIndex index(cloud_);
+  std::mt19937_64 rng(32);
+  std::size_t found = 0;
+  std::size_t rejected = 0;
+  for (std::size_t i = 0; i < queries_.size(); ++i) {
+    const Brute& b = expected_[i];
+    // Bounds from well inside to well outside the true distance.
+    const float bound = b.squared_distance * uniform(rng, 0.0, 2.0) + uniform(rng, 0.0, 1e-3);
+    const std::optional<Neighbor> n = index.nearest(queries_[i], bound);
+    if (b.squared_distance > bound) {
+      ASSERT_FALSE(n.has_value()) << "query " << i << ": nearest " << b.squared_distance
+                                  << " is beyond the bound " << bound;
+      ++rejected;
+    } else if (b.squared_distance < bound) {
+      ASSERT_TRUE(n.has_value()) << "query " << i << ": nearest " << b.squared_distance
+                                 << " is within the bound " << bound;
+      ASSERT_EQ(n->squared_distance, b.squared_distance);
+      if (b.ties == 0) {
+        ASSERT_EQ(n->index, b.index);
+      }
+      ++found;
+    }
+  }
+  // Both branches were exercised substantially.
+  EXPECT_GT(found, queries_.size() / 4);
+  EXPECT_GT(rejected, queries_.size() / 4);
+
+  // Right at the boundary, one float step either side.
+  for (std::size_t i = 0; i < 200; ++i) {
+    const Brute& b = expected_[i];
+    if (b.squared_distance == 0.0F) continue;
+    const float above = std::nextafter(b.squared_distance, std::numeric_limits<float>::max());
+    const float below = std::nextafter(b.squared_distance, 0.0F);
+    const auto hit = index.nearest(queries_[i], above);
+    ASSERT_TRUE(hit.has_value()) << "query " << i;
+    ASSERT_EQ(hit->squared_distance, b.squared_distance);
+    ASSERT_FALSE(index.nearest(queries_[i], below).has_value()) << "query " << i;
+  }
+}
+
+TEST_F(NearestNeighborTest, ConcurrentQueriesMatchSingleThreaded) {
+  const ReferenceIndex index(cloud_);
+  std::vector<std::optional<Neighbor>> single;
+  for (const auto& q : queries_) single.push_back(index.nearest(q, 4.0F));
+
+  constexpr int kThreads = 4;
+  std::vector<std::vector<std::optional<Neighbor>>> results(kThreads);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      auto& out = results[static_cast<std::size_t>(t)];
+      // Every thread runs every query several times, in its own order.
+      for (int round = 0; round < 5; ++round) {
+        out.assign(queries_.size(), std::nullopt);
+        for (std::size_t k = 0; k < queries_.size(); ++k) {
+          // A rotation of the query order, different for each thread.
+          const std::size_t n = queries_.size();
+          const std::size_t i = (k + static_cast<std::size_t>(t) * n / kThreads) % n;
+          out[i] = index.nearest(queries_[i], 4.0F);
+        }
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (int t = 0; t < kThreads; ++t) {
+    const auto& out = results[static_cast<std::size_t>(t)];
+    ASSERT_EQ(out.size(), single.size());
+    for (std::size_t i = 0; i < single.size(); ++i) {
+      ASSERT_EQ(out[i].has_value(), single[i].has_value()) << "thread " << t << " query " << i;
+      if (single[i]) {
+        ASSERT_EQ(out[i]->index, single[i]->index) << "thread " << t << " query " << i;
+        ASSERT_EQ(out[i]->squared_distance, single[i]->squared_distance);
+      }
+    }
+  }
+}
+
+TEST_F(NearestNeighborTest, MoveKeepsWorking) {
+  ReferenceIndex a(cloud_);
+  const sgdicp::BoundingBox box = a.bounding_box();
+  ReferenceIndex b(std::move(a));
+  EXPECT_EQ(b.size(), cloud_.size());
+  EXPECT_EQ(b.bounding_box().min, box.min);
+  EXPECT_EQ(b.bounding_box().max, box.max);
+  check_all(b);
+
+  // Move assignment over an index of another cloud.
+  std::mt19937_64 rng(33);
+  ReferenceIndex c(random_cloud(rng, 100, 1.0));
+  c = std::move(b);
+  EXPECT_EQ(c.size(), cloud_.size());
+  check_all(c);
+
+  // Indexes kept in a growing vector (which moves them) stay valid.
+  std::vector<ReferenceIndex> many;
+  for (int i = 0; i < 5; ++i) many.emplace_back(cloud_);
+  for (const auto& index : many) check_all(index);
+}
+
+TEST_F(NearestNeighborTest, CloudAndBoundingBox) {
+  const ReferenceIndex index(cloud_);
+  ASSERT_EQ(index.cloud().size(), cloud_.size());
+  for (std::size_t i = 0; i < cloud_.size(); ++i) {
+    ASSERT_EQ(index.cloud().points[i], cloud_.points[i]);
+  }
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (const auto& p : cloud_.points) {
+    lo = lo.cwiseMin(p.cast<double>());
+    hi = hi.cwiseMax(p.cast<double>());
+  }
+  EXPECT_EQ(index.bounding_box().min, lo);
+  EXPECT_EQ(index.bounding_box().max, hi);
+}
+
+TEST(NearestNeighbor, SinglePointCloud) {
+  PointCloud one;
+  one.points.emplace_back(1.0F, 2.0F, 3.0F);
+  const ReferenceIndex index(one);
+  const auto n = index.nearest(Eigen::Vector3f(1.0F, 2.0F, 5.0F));
+  ASSERT_TRUE(n);
+  EXPECT_EQ(n->index, 0U);
+  EXPECT_EQ(n->squared_distance, 4.0F);
+  EXPECT_FALSE(index.nearest(Eigen::Vector3f(1.0F, 2.0F, 5.0F), 3.9F).has_value());
+}
+
+TEST(NearestNeighbor, DuplicatePointsAreFine) {
+  PointCloud dup;
+  for (int i = 0; i < 100; ++i) dup.points.emplace_back(0.5F, 0.5F, 0.5F);
+  dup.points.emplace_back(2.0F, 0.5F, 0.5F);
+  const ReferenceIndex index(dup);
+  const auto n = index.nearest(Eigen::Vector3f(0.0F, 0.5F, 0.5F));
+  ASSERT_TRUE(n);
+  EXPECT_LT(n->index, 100U);
+  EXPECT_EQ(n->squared_distance, 0.25F);
+  const auto m = index.nearest(Eigen::Vector3f(3.0F, 0.5F, 0.5F));
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->index, 100U);
+}
+
+TEST(NearestNeighbor, EmptyCloudThrows) {
+  EXPECT_THROW(ReferenceIndex(PointCloud{}), sgdicp::InvalidInputError);
+}
+
+TEST(NearestNeighbor, NonFinitePointThrows) {
+  std::mt19937_64 rng(34);
+  for (const float bad :
+       {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+        -std::numeric_limits<float>::infinity()}) {
+    for (int axis = 0; axis < 3; ++axis) {
+      PointCloud cloud = random_cloud(rng, 100, 1.0);
+      cloud.points[57][axis] = bad;
+      EXPECT_THROW(ReferenceIndex{cloud}, sgdicp::InvalidInputError) << "axis " << axis;
+      try {
+        const ReferenceIndex index(cloud);
+      } catch (const sgdicp::InvalidInputError& e) {
+        EXPECT_NE(std::string(e.what()).find("57"), std::string::npos)
+            << "the message should name the point: " << e.what();
+      }
+    }
+  }
+}
+
+}  // namespace

@@ -1,0 +1,279 @@
+// Tests of rigid transforms as text (transform_io.hpp).
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <Eigen/Geometry>
+
+#include "sgdicp/error.hpp"
+#include "sgdicp/pose.hpp"
+#include "sgdicp/transform_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+double uniform(std::mt19937_64& rng, double lo, double hi) {
+  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
+
+Eigen::Matrix4d random_rigid(std::mt19937_64& rng) {
+  Eigen::Quaterniond q(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1),
+                       uniform(rng, -1, 1));
+  q.normalize();
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  t.topLeftCorner<3, 3>() = q.toRotationMatrix();
+  t.topRightCorner<3, 1>() =
+      Eigen::Vector3d(uniform(rng, -100, 100), uniform(rng, -100, 100), uniform(rng, -100, 100));
+  return t;
+}
+
+// Row-major numbers with 17 significant digits, `count` of them (12 or 16), joined by `sep`.
+std::string numbers(const Eigen::Matrix4d& t, int count, const std::string& sep) {
+  std::ostringstream s;
+  s.precision(17);
+  for (int i = 0; i < count; ++i) {
+    if (i > 0) s << sep;
+    s << t(i / 4, i % 4);
+  }
+  return s.str();
+}
+
+double max_abs_diff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return (a - b).cwiseAbs().maxCoeff();
+}
+
+// Expects parse_transform(text, what) to throw FormatError whose message names `what`.
+void expect_format_error(const std::string& text, const std::string& what,
+                         const std::string& also = "") {
+  try {
+    (void)sgdicp::parse_transform(text, what);
+    ADD_FAILURE() << "no error for: " << text;
+  } catch (const sgdicp::FormatError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(what), std::string::npos) << message;
+    if (!also.empty()) {
+      EXPECT_NE(message.find(also), std::string::npos) << message;
+    }
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type for '" << text << "': " << e.what();
+  }
+}
+
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    path_ = fs::temp_directory_path() / ("sgdicp_test_transform_io_" + std::to_string(::getpid()) +
+                                         "_" + std::to_string(counter++));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  [[nodiscard]] const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(ParseTransform, TwelveAndSixteenNumbers) {
+  std::mt19937_64 rng(41);
+  for (int i = 0; i < 100; ++i) {
+    const Eigen::Matrix4d t = random_rigid(rng);
+    const Eigen::Matrix4d a = sgdicp::parse_transform(numbers(t, 12, " "), "twelve");
+    const Eigen::Matrix4d b = sgdicp::parse_transform(numbers(t, 16, " "), "sixteen");
+    ASSERT_LT(max_abs_diff(a, t), 1e-14);
+    ASSERT_LT(max_abs_diff(b, t), 1e-14);
+    ASSERT_EQ(a.row(3), Eigen::RowVector4d(0, 0, 0, 1));
+    ASSERT_TRUE(sgdicp::is_rigid_transform(a, 1e-14));
+  }
+  // Exact values for a simple one: a 90 degree yaw and a translation.
+  const Eigen::Matrix4d t = sgdicp::parse_transform("0 -1 0 1\n1 0 0 2\n0 0 1 3\n", "simple");
+  Eigen::Matrix4d expected;
+  expected << 0, -1, 0, 1, 1, 0, 0, 2, 0, 0, 1, 3, 0, 0, 0, 1;
+  EXPECT_LT(max_abs_diff(t, expected), 1e-15);
+  EXPECT_EQ((t.topRightCorner<3, 1>()), Eigen::Vector3d(1, 2, 3));
+}
+
+TEST(ParseTransform, SeparatorsCommentsAndBrackets) {
+  std::mt19937_64 rng(42);
+  const Eigen::Matrix4d t = random_rigid(rng);
+  const std::string ws = numbers(t, 16, " ");
+  const std::string variants[] = {
+      numbers(t, 16, ","),
+      numbers(t, 16, ", "),
+      numbers(t, 12, " ,\t"),
+      numbers(t, 16, "\n"),
+      numbers(t, 16, "\r\n") + "\r\n",
+      numbers(t, 12, ";"),
+      "# a comment line\n" + ws + "\n# trailing comment\n",
+      "\n\n   " + ws + "   \n\n",
+      ws + " # comment after the numbers 1 2 3",
+      "[" + numbers(t, 16, ", ") + "]",
+  };
+  for (const std::string& text : variants) {
+    SCOPED_TRACE(text);
+    const Eigen::Matrix4d parsed = sgdicp::parse_transform(text, "variant");
+    EXPECT_LT(max_abs_diff(parsed, t), 1e-14);
+  }
+  // Full numpy print of a 4x4.
+  std::ostringstream numpy;
+  numpy.precision(17);
+  numpy << "[";
+  for (int r = 0; r < 4; ++r) {
+    numpy << (r ? " [" : "[");
+    for (int c = 0; c < 4; ++c) numpy << (c ? ", " : "") << t(r, c);
+    numpy << (r < 3 ? "],\n" : "]]\n");
+  }
+  EXPECT_LT(max_abs_diff(sgdicp::parse_transform(numpy.str(), "numpy"), t), 1e-14);
+  // Comment lines with numbers in them are ignored: 12 numbers + a comment with 4 more.
+  EXPECT_LT(max_abs_diff(sgdicp::parse_transform("# 1 2 3 4\n" + numbers(t, 12, " "), "c"), t),
+            1e-14);
+  // Exponents and an explicit plus sign.
+  EXPECT_LT(
+      max_abs_diff(sgdicp::parse_transform("1e0 0 0 +1.5e+1  0 1.0 0 -2E-1  0 0 +1 0", "exponents"),
+                   [] {
+                     Eigen::Matrix4d e = Eigen::Matrix4d::Identity();
+                     e(0, 3) = 15.0;
+                     e(1, 3) = -0.2;
+                     return e;
+                   }()),
+      1e-15);
+}
+
+TEST(ParseTransform, SixDigitFilesAreProjectedOntoARotation) {
+  std::mt19937_64 rng(43);
+  for (int i = 0; i < 50; ++i) {
+    const Eigen::Matrix4d t = random_rigid(rng);
+    std::ostringstream s;
+    s.precision(6);
+    for (int k = 0; k < 12; ++k) s << t(k / 4, k % 4) << ' ';
+    const Eigen::Matrix4d parsed = sgdicp::parse_transform(s.str(), "six digits");
+    ASSERT_TRUE(sgdicp::is_rigid_transform(parsed, 1e-12));
+    ASSERT_LT(max_abs_diff(parsed.topLeftCorner<3, 3>(), t.topLeftCorner<3, 3>()), 1e-5);
+  }
+}
+
+TEST(ParseTransform, WrongCount) {
+  expect_format_error("", "empty text", "0");
+  expect_format_error("# only a comment\n", "comment only");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1", "eleven numbers", "11");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 0 0", "thirteen numbers", "13");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 0", "seventeen numbers", "17");
+  expect_format_error("1 2 3 4 5", "five numbers", "5");
+}
+
+TEST(ParseTransform, NotANumber) {
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 x", "letter at the end", "line 1");
+  expect_format_error("1 0 0 0\n0 1 0 0\n0 0 one 0\n", "word on line 3", "line 3");
+  expect_format_error("hello world", "text");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 0.0.0", "two dots");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 --1", "double minus");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 1..", "dots");
+}
+
+TEST(ParseTransform, NonRigid) {
+  expect_format_error("2 0 0 0 0 2 0 0 0 0 2 0", "scaled");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 -1 0", "reflection");
+  expect_format_error("1 0.1 0 0 0 1 0 0 0 0 1 0", "shear");
+  expect_format_error("0 0 0 0 0 0 0 0 0 0 0 0", "zeros");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 2", "bad last row");
+  expect_format_error("1 0 0 0 0 1 0 0 0 0 1 0 1 0 0 1", "bad last row 2");
+}
+
+TEST(ParseTransform, NonFinite) {
+  expect_format_error("1 0 0 nan 0 1 0 0 0 0 1 0", "nan value");
+  expect_format_error("1 0 0 NaN 0 1 0 0 0 0 1 0", "NaN value");
+  expect_format_error("1 0 0 inf 0 1 0 0 0 0 1 0", "inf value");
+  expect_format_error("1 0 0 -inf 0 1 0 0 0 0 1 0", "minus inf value");
+  expect_format_error("1 0 0 1e999 0 1 0 0 0 0 1 0", "overflowing value");
+}
+
+TEST(TransformFile, WriteReadRoundTripIsBitExact) {
+  // write_transform promises 17 significant digits, "exact round trip" (transform_io.hpp), and
+  // parse_transform keeps a matrix that is already a rotation to machine precision bit for bit
+  // (it projects only sloppier, e.g. 6-digit, matrices), so `--output` then `--init` reproduces
+  // a pose exactly.
+  const TempDir dir;
+  std::mt19937_64 rng(44);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Matrix4d t = random_rigid(rng);
+    const fs::path file = dir.path() / ("t" + std::to_string(i) + ".txt");
+    sgdicp::write_transform(file, t);
+    // The text itself parses back bit-exactly (17 digits).
+    std::ifstream in(file);
+    Eigen::Matrix4d raw;
+    for (int k = 0; k < 16; ++k) in >> raw(k / 4, k % 4);
+    ASSERT_TRUE(in) << "4 lines of 4 numbers";
+    ASSERT_EQ(raw, t) << "the written text is not exact";
+    const Eigen::Matrix4d back = sgdicp::read_transform(file);
+    for (int k = 0; k < 16; ++k) {
+      ASSERT_EQ(back(k / 4, k % 4), t(k / 4, k % 4))
+          << "element " << k << " of transform " << i << " differs by "
+          << back(k / 4, k % 4) - t(k / 4, k % 4);
+    }
+  }
+}
+
+TEST(TransformFile, FormatTransformLayout) {
+  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
+  t(0, 3) = 0.1;
+  const std::string text = sgdicp::format_transform(t);
+  // 4 lines of 4 numbers; 0.1 needs all 17 digits to round-trip.
+  std::istringstream lines(text);
+  std::string line;
+  int count = 0;
+  while (std::getline(lines, line)) {
+    std::istringstream fields(line);
+    double v = 0;
+    int n = 0;
+    while (fields >> v) ++n;
+    EXPECT_EQ(n, 4) << line;
+    ++count;
+  }
+  EXPECT_EQ(count, 4);
+  EXPECT_NE(text.find("0.10000000000000001"), std::string::npos) << text;
+}
+
+TEST(TransformFile, ReadErrors) {
+  const TempDir dir;
+  EXPECT_THROW((void)sgdicp::read_transform(dir.path() / "missing.txt"), sgdicp::IoError);
+  try {
+    (void)sgdicp::read_transform(dir.path() / "missing.txt");
+  } catch (const sgdicp::IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.txt"), std::string::npos) << e.what();
+  }
+  // A directory is not a transform file (either error type is acceptable, but an error).
+  EXPECT_THROW((void)sgdicp::read_transform(dir.path()), sgdicp::Error);
+  // A file with 11 numbers names the file.
+  const fs::path bad = dir.path() / "bad.txt";
+  {
+    std::ofstream out(bad);
+    out << "1 0 0 0\n0 1 0 0\n0 0 1\n";
+  }
+  try {
+    (void)sgdicp::read_transform(bad);
+    ADD_FAILURE() << "no error for 11 numbers";
+  } catch (const sgdicp::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find(bad.string()), std::string::npos) << e.what();
+  }
+  // Writing into a folder that does not exist.
+  EXPECT_THROW(
+      sgdicp::write_transform(dir.path() / "no" / "such" / "dir.txt", Eigen::Matrix4d::Identity()),
+      sgdicp::IoError);
+}
+
+}  // namespace
