@@ -12,16 +12,15 @@
 
 #include "sgdicp/point_to_point.hpp"
 #include "sgdicp/pose.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using sgdicp::test::uniform;
 
 using sgdicp::PointToPointGradient;
 using sgdicp::PoseVector;
 constexpr double kPi = std::numbers::pi;
-
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
-}
 
 Eigen::Vector3d random_point(std::mt19937_64& rng, double half_width) {
   return {uniform(rng, -half_width, half_width), uniform(rng, -half_width, half_width),

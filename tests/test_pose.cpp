@@ -9,38 +9,22 @@
 #include <Eigen/Geometry>
 
 #include "sgdicp/pose.hpp"
+#include "test_support.hpp"
 
 namespace {
 
+using sgdicp::test::random_rigid;
+using sgdicp::test::random_rotation;
+using sgdicp::test::uniform;
+
 using sgdicp::PoseVector;
 constexpr double kPi = std::numbers::pi;
-
-// Uniform double in [lo, hi) from raw generator bits (independent of the library's
-// distribution implementation, so the test data are the same everywhere).
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
-}
 
 Eigen::Matrix3d eigen_rpy(double roll, double pitch, double yaw) {
   return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
           Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
-}
-
-Eigen::Matrix3d random_rotation(std::mt19937_64& rng) {
-  Eigen::Quaterniond q(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1),
-                       uniform(rng, -1, 1));
-  q.normalize();
-  return q.toRotationMatrix();
-}
-
-Eigen::Matrix4d random_rigid(std::mt19937_64& rng) {
-  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
-  t.topLeftCorner<3, 3>() = random_rotation(rng);
-  t.topRightCorner<3, 1>() =
-      Eigen::Vector3d(uniform(rng, -50, 50), uniform(rng, -50, 50), uniform(rng, -50, 50));
-  return t;
 }
 
 double max_abs_diff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
@@ -207,7 +191,7 @@ TEST(Pose, TransformFromPoseAndBack) {
     for (int k = 3; k < 6; ++k) ASSERT_NEAR(sgdicp::wrap_angle(back[k] - theta[k]), 0.0, 1e-9);
 
     // And from any rigid transform to a pose and back.
-    const Eigen::Matrix4d m = random_rigid(rng);
+    const Eigen::Matrix4d m = random_rigid(rng, 50.0);
     ASSERT_LT(max_abs_diff(sgdicp::transform_from_pose(sgdicp::pose_from_transform(m)), m), 1e-9);
   }
 }
@@ -243,7 +227,7 @@ TEST(Pose, IsRigidTransform) {
   std::mt19937_64 rng(808);
   EXPECT_TRUE(sgdicp::is_rigid_transform(Eigen::Matrix4d::Identity()));
   for (int i = 0; i < 100; ++i) {
-    const Eigen::Matrix4d t = random_rigid(rng);
+    const Eigen::Matrix4d t = random_rigid(rng, 50.0);
     ASSERT_TRUE(sgdicp::is_rigid_transform(t));
 
     Eigen::Matrix4d scaled = t;
@@ -286,7 +270,7 @@ TEST(Pose, IsRigidTransform) {
 TEST(Pose, OrthonormalizedIsNearestRotation) {
   std::mt19937_64 rng(909);
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Matrix4d t = random_rigid(rng);
+    const Eigen::Matrix4d t = random_rigid(rng, 50.0);
     // An exact rotation stays (numerically) where it is.
     const Eigen::Matrix4d same = sgdicp::orthonormalized(t);
     ASSERT_LT(max_abs_diff(same, t), 1e-13);

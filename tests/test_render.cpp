@@ -15,8 +15,11 @@
 #include <vector>
 
 #include "sgdicp/error.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using sgdicp::test::TempDir;
 
 namespace fs = std::filesystem;
 
@@ -41,28 +44,6 @@ Eigen::Matrix4d small_motion() {
   T(2, 3) = -0.1;
   return T;
 }
-
-/// A fresh directory under the system temp dir, removed with everything in it at the end.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device random;
-    path_ = fs::temp_directory_path() /
-            ("sgdicp_test_render_" + std::to_string(random()) + "_" + std::to_string(random()));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::vector<std::uint8_t> read_bytes(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);

@@ -13,17 +13,17 @@
 #include "sgdicp/error.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/scaling.hpp"
+#include "test_support.hpp"
 
 namespace {
+
+using sgdicp::test::random_rigid;
+using sgdicp::test::uniform;
 
 using sgdicp::BoundingBox;
 using sgdicp::PointCloud;
 using sgdicp::ScalingOrigin;
 using sgdicp::UnitCubeScaling;
-
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
-}
 
 // A cloud inside a random box: corner anywhere in [-1000, 1000]^3, sides in [0.01, 100] m.
 PointCloud random_cloud(std::mt19937_64& rng, std::size_t n) {
@@ -45,18 +45,6 @@ BoundingBox box_of(const PointCloud& cloud) {
   BoundingBox b;
   b.extend(cloud);
   return b;
-}
-
-Eigen::Matrix4d random_rigid(std::mt19937_64& rng, double max_translation) {
-  Eigen::Quaterniond q(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1),
-                       uniform(rng, -1, 1));
-  q.normalize();
-  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
-  t.topLeftCorner<3, 3>() = q.toRotationMatrix();
-  t.topRightCorner<3, 1>() =
-      Eigen::Vector3d(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)) *
-      max_translation;
-  return t;
 }
 
 Eigen::Vector3d apply(const Eigen::Matrix4d& t, const Eigen::Vector3d& p) {

@@ -17,25 +17,14 @@
 #include "sgdicp/error.hpp"
 #include "sgdicp/pose.hpp"
 #include "sgdicp/transform_io.hpp"
+#include "test_support.hpp"
 
 namespace {
 
+using sgdicp::test::random_rigid;
+using sgdicp::test::TempDir;
+
 namespace fs = std::filesystem;
-
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53;
-}
-
-Eigen::Matrix4d random_rigid(std::mt19937_64& rng) {
-  Eigen::Quaterniond q(uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1),
-                       uniform(rng, -1, 1));
-  q.normalize();
-  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
-  t.topLeftCorner<3, 3>() = q.toRotationMatrix();
-  t.topRightCorner<3, 1>() =
-      Eigen::Vector3d(uniform(rng, -100, 100), uniform(rng, -100, 100), uniform(rng, -100, 100));
-  return t;
-}
 
 // Row-major numbers with 17 significant digits, `count` of them (12 or 16), joined by `sep`.
 std::string numbers(const Eigen::Matrix4d& t, int count, const std::string& sep) {
@@ -69,30 +58,10 @@ void expect_format_error(const std::string& text, const std::string& what,
   }
 }
 
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() / ("sgdicp_test_transform_io_" + std::to_string(::getpid()) +
-                                         "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
 TEST(ParseTransform, TwelveAndSixteenNumbers) {
   std::mt19937_64 rng(41);
   for (int i = 0; i < 100; ++i) {
-    const Eigen::Matrix4d t = random_rigid(rng);
+    const Eigen::Matrix4d t = random_rigid(rng, 100.0);
     const Eigen::Matrix4d a = sgdicp::parse_transform(numbers(t, 12, " "), "twelve");
     const Eigen::Matrix4d b = sgdicp::parse_transform(numbers(t, 16, " "), "sixteen");
     ASSERT_LT(max_abs_diff(a, t), 1e-14);
@@ -110,7 +79,7 @@ TEST(ParseTransform, TwelveAndSixteenNumbers) {
 
 TEST(ParseTransform, SeparatorsCommentsAndBrackets) {
   std::mt19937_64 rng(42);
-  const Eigen::Matrix4d t = random_rigid(rng);
+  const Eigen::Matrix4d t = random_rigid(rng, 100.0);
   const std::string ws = numbers(t, 16, " ");
   const std::string variants[] = {
       numbers(t, 16, ","),
@@ -157,7 +126,7 @@ TEST(ParseTransform, SeparatorsCommentsAndBrackets) {
 TEST(ParseTransform, SixDigitFilesAreProjectedOntoARotation) {
   std::mt19937_64 rng(43);
   for (int i = 0; i < 50; ++i) {
-    const Eigen::Matrix4d t = random_rigid(rng);
+    const Eigen::Matrix4d t = random_rigid(rng, 100.0);
     std::ostringstream s;
     s.precision(6);
     for (int k = 0; k < 12; ++k) s << t(k / 4, k % 4) << ' ';
@@ -210,7 +179,7 @@ TEST(TransformFile, WriteReadRoundTripIsBitExact) {
   const TempDir dir;
   std::mt19937_64 rng(44);
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Matrix4d t = random_rigid(rng);
+    const Eigen::Matrix4d t = random_rigid(rng, 100.0);
     const fs::path file = dir.path() / ("t" + std::to_string(i) + ".txt");
     sgdicp::write_transform(file, t);
     // The text itself parses back bit-exactly (17 digits).
