@@ -1,5 +1,6 @@
 #include "sgdicp/nearest_neighbor.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include <nanoflann.hpp>
@@ -109,6 +110,22 @@ std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,
   impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (!result.found()) return std::nullopt;
   return Neighbor{result.index(), result.worstDist()};
+}
+
+void ReferenceIndex::k_nearest(const Eigen::Vector3f& query, std::size_t k,
+                               std::vector<Neighbor>& neighbors) const {
+  neighbors.clear();
+  k = std::min(k, size());
+  if (k == 0) return;
+  // Thread-local scratch: k-nearest queries run from many threads during normal estimation.
+  thread_local std::vector<std::uint32_t> indices;
+  thread_local std::vector<float> distances;
+  indices.resize(k);
+  distances.resize(k);
+  nanoflann::KNNResultSet<float, std::uint32_t> result(k);
+  result.init(indices.data(), distances.data());
+  impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  for (std::size_t i = 0; i < result.size(); ++i) neighbors.push_back({indices[i], distances[i]});
 }
 
 }  // namespace sgdicp

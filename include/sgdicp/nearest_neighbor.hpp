@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -43,6 +44,10 @@ class ReferenceIndex {
   [[nodiscard]] std::optional<Neighbor> nearest(
       const Eigen::Vector3f& query,
       float max_squared_distance = std::numeric_limits<float>::max()) const;
+
+  /// The k nearest reference points to query, closest first (fewer if the cloud is smaller).
+  /// `neighbors` is cleared and refilled; pass the same vector again to avoid allocations.
+  void k_nearest(const Eigen::Vector3f& query, std::size_t k, std::vector<Neighbor>& neighbors) const;
 
  private:
   struct Impl;

@@ -9,9 +9,19 @@
 namespace sgdicp {
 
 /// A set of 3D points in one frame, in metres. Float storage halves memory and cache traffic;
-/// all accumulations of the method are done in double.
+/// all accumulations of the method are done in double. Normals and covariances are optional
+/// (empty, or one per point): preprocessing.hpp estimates them for the plane-based costs.
 struct PointCloud {
   std::vector<Eigen::Vector3f> points;
+  std::vector<Eigen::Vector3f> normals;      ///< unit normals, or empty
+  std::vector<Eigen::Matrix3f> covariances;  ///< local covariances (m^2), or empty
+
+  [[nodiscard]] bool has_normals() const noexcept {
+    return !points.empty() && normals.size() == points.size();
+  }
+  [[nodiscard]] bool has_covariances() const noexcept {
+    return !points.empty() && covariances.size() == points.size();
+  }
 
   [[nodiscard]] std::size_t size() const noexcept { return points.size(); }
   [[nodiscard]] bool empty() const noexcept { return points.empty(); }
