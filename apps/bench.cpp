@@ -48,12 +48,14 @@ struct Row {
   std::size_t line = 0;
   std::string source;
   std::string reference;
+  std::string method;
   std::size_t repeat = 0;
   double t_err = 0, r_err_sum = 0, r_err_geo_deg = 0;
   double init_t_err = 0, init_r_geo_deg = 0;
   double build_ms = 0, align_ms = 0;
   std::size_t iterations = 0, points = 0, source_points = 0;
   bool converged = false;
+  bool degenerate = false;
   std::string stop_reason;
 };
 
@@ -124,9 +126,101 @@ std::string fmt(double v, int precision = 4) {
   return buf;
 }
 
+std::vector<std::string> split_commas(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (!item.empty()) out.push_back(item);
+  }
+  return out;
+}
+
+void print_summary(const std::string& label, const std::vector<const Row*>& rows,
+                   const std::vector<Threshold>& thresholds) {
+  std::vector<double> te, rs, rg, tm, pts, its;
+  std::size_t converged = 0;
+  for (const Row* r : rows) {
+    te.push_back(r->t_err);
+    rs.push_back(r->r_err_sum);
+    rg.push_back(r->r_err_geo_deg);
+    tm.push_back(r->build_ms + r->align_ms);
+    pts.push_back(static_cast<double>(r->points));
+    its.push_back(static_cast<double>(r->iterations));
+    converged += r->converged ? 1 : 0;
+  }
+  const auto line = [](const char* what, const Stats& s, const char* unit) {
+    std::printf("  %-28s median %-10s mean %s +- %s %s\n", what, fmt(s.median).c_str(),
+                fmt(s.mean).c_str(), fmt(s.std).c_str(), unit);
+  };
+  std::printf("\nsummary over %zu registrations (%s)\n", rows.size(), label.c_str());
+  line("translation error", stats_of(te), "m");
+  line("rotation error (sum |d rpy|)", stats_of(rs), "rad");
+  line("rotation error (geodesic)", stats_of(rg), "deg");
+  line("time (prepare + register)", stats_of(tm), "ms, file I/O excluded");
+  line("points processed", stats_of(pts), "");
+  line("iterations", stats_of(its), "");
+  std::printf("  converged: %zu/%zu\n", converged, rows.size());
+  for (const auto& th : thresholds) {
+    std::size_t ok = 0;
+    for (const Row* r : rows) {
+      ok += (r->t_err < th.translation_m && r->r_err_geo_deg < th.rotation_deg) ? 1 : 0;
+    }
+    std::printf("  success (t_err < %s m and r_geo < %s deg): %zu/%zu = %s %%\n",
+                fmt(th.translation_m).c_str(), fmt(th.rotation_deg).c_str(), ok, rows.size(),
+                fmt(100.0 * static_cast<double>(ok) / static_cast<double>(rows.size()), 3).c_str());
+  }
+}
+
+// One line per method: the comparison table of a multi-method run.
+void print_comparison(const std::vector<std::string>& methods, const std::vector<Row>& rows,
+                      const std::vector<Threshold>& thresholds) {
+  std::printf("\n%-10s %5s %12s %12s %12s %10s %10s %5s", "method", "n", "t_err med[m]",
+              "r_geo med[°]", "time med[ms]", "points med", "iters med", "conv");
+  for (const auto& th : thresholds) {
+    std::printf(" %14s",
+                ("ok<" + fmt(th.translation_m, 3) + "m," + fmt(th.rotation_deg, 3) + "°").c_str());
+  }
+  std::printf("\n");
+  for (const auto& m : methods) {
+    std::vector<double> te, rg, tm, pts, its;
+    std::size_t converged = 0;
+    std::vector<std::size_t> ok(thresholds.size(), 0);
+    for (const auto& r : rows) {
+      if (r.method != m) continue;
+      te.push_back(r.t_err);
+      rg.push_back(r.r_err_geo_deg);
+      tm.push_back(r.build_ms + r.align_ms);
+      pts.push_back(static_cast<double>(r.points));
+      its.push_back(static_cast<double>(r.iterations));
+      converged += r.converged ? 1 : 0;
+      for (std::size_t t = 0; t < thresholds.size(); ++t) {
+        ok[t] +=
+            (r.t_err < thresholds[t].translation_m && r.r_err_geo_deg < thresholds[t].rotation_deg)
+                ? 1
+                : 0;
+      }
+    }
+    const std::size_t n = te.size();
+    std::printf("%-10s %5zu %12s %12s %12s %10s %10s %5zu", m.c_str(), n,
+                fmt(stats_of(te).median).c_str(), fmt(stats_of(rg).median).c_str(),
+                fmt(stats_of(tm).median).c_str(), fmt(stats_of(pts).median).c_str(),
+                fmt(stats_of(its).median).c_str(), converged);
+    for (const std::size_t k : ok) {
+      std::printf(
+          " %13s%%",
+          fmt(n ? 100.0 * static_cast<double>(k) / static_cast<double>(n) : 0.0, 3).c_str());
+    }
+    std::printf("\n");
+  }
+}
+
 void run(const BenchOptions& o) {
-  const SgdSettings settings = make_settings(o.settings);
   if (o.repeat == 0) throw InvalidSettingsError("--repeat must be at least 1");
+  const std::vector<std::string> method_list = split_commas(o.settings.method);
+  if (method_list.empty()) throw InvalidSettingsError("--method: no method given");
+  std::vector<MethodSpec> methods;
+  for (const auto& name : method_list) methods.push_back(make_method(name, o.settings));
   std::optional<Perturbation> perturbation;
   if (!o.perturb.empty()) {
     const auto v = parse_numbers(o.perturb, "--perturb");
@@ -155,17 +249,19 @@ void run(const BenchOptions& o) {
     if (!csv) throw IoError(o.csv + ": cannot open for writing");
     csv_guard.reset(csv);
     std::fprintf(csv,
-                 "pairs_file,line,source,reference,repeat,translation_error_m,"
+                 "pairs_file,line,source,reference,method,repeat,translation_error_m,"
                  "rotation_error_euler_rad,rotation_error_geodesic_deg,initial_translation_error_m,"
                  "initial_rotation_error_deg,build_ms,align_ms,time_ms,iterations,points_processed,"
-                 "source_points,converged,stop_reason\n");
+                 "source_points,converged,stop_reason,degenerate\n");
   }
 
   const bool tty = isatty(STDERR_FILENO) != 0;
   const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t total = jobs.size() * o.repeat * methods.size();
   std::vector<Row> rows;
-  std::printf("%-4s %-42s %3s %10s %10s %9s %9s %6s %9s %4s\n", "#", "pair (source <- reference)",
-              "rep", "t_err[m]", "r_sum[rad]", "r_geo[deg]", "time[ms]", "iters", "points", "conv");
+  std::printf("%-4s %-36s %-9s %3s %10s %10s %9s %9s %6s %9s %4s\n", "#",
+              "pair (source <- reference)", "method", "rep", "t_err[m]", "r_sum[rad]", "r_geo[deg]",
+              "time[ms]", "iters", "points", "conv");
   std::map<std::string, PointCloud> cloud_cache;
   const auto cloud = [&](const std::filesystem::path& path, const char* role) -> const PointCloud& {
     const std::string key = path.lexically_normal().string();
@@ -177,97 +273,80 @@ void run(const BenchOptions& o) {
     const auto& [file, pair] = jobs[j];
     const PointCloud& source = cloud(pair.source, "source");
     const PointCloud& reference_cloud = cloud(pair.reference, "reference");
-    const auto build_start = std::chrono::steady_clock::now();
-    const ReferenceIndex reference(reference_cloud);
-    const double build_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
-            .count();
     for (std::size_t rep = 0; rep < o.repeat; ++rep) {
       const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
       const Eigen::Matrix4d T_init = perturbation
                                          ? perturbed(T_gt, *perturbation, j * 1000003ULL + rep)
                                          : Eigen::Matrix4d::Identity();
-      SgdSettings s = settings;
-      s.seed = settings.seed + rep;
-      const RegistrationResult r = align(source, reference, s, T_init);
-      Row row;
-      row.pairs_file = file;
-      row.line = pair.line;
-      row.source = pair.source.filename().string();
-      row.reference = pair.reference.filename().string();
-      row.repeat = rep;
-      row.t_err = translation_error(r.T_reference_source, T_gt);
-      row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
-      row.r_err_geo_deg =
-          rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
-      row.init_t_err = translation_error(T_init, T_gt);
-      row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
-      row.build_ms = build_ms;
-      row.align_ms = r.time_ms;
-      row.iterations = r.iterations;
-      row.points = r.points_processed;
-      row.source_points = source.size();
-      row.converged = r.converged;
-      row.stop_reason = std::string(to_string(r.stop_reason));
-      const std::string name = row.source + " <- " + row.reference;
-      std::printf("%-4zu %-42s %3zu %10s %10s %9s %9s %6zu %9zu %4s\n", j + 1,
-                  name.substr(0, 42).c_str(), rep, fmt(row.t_err).c_str(),
-                  fmt(row.r_err_sum).c_str(), fmt(row.r_err_geo_deg).c_str(),
-                  fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
-                  row.converged ? "yes" : "no");
-      std::fflush(stdout);
-      if (csv) {
-        std::fprintf(
-            csv, "%s,%zu,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s\n",
-            file.c_str(), row.line, pair.source.string().c_str(), pair.reference.string().c_str(),
-            rep, row.t_err, row.r_err_sum, row.r_err_geo_deg, row.init_t_err, row.init_r_geo_deg,
-            row.build_ms, row.align_ms, row.build_ms + row.align_ms, row.iterations, row.points,
-            row.source_points, row.converged ? 1 : 0, row.stop_reason.c_str());
-      }
-      rows.push_back(std::move(row));
-      const double elapsed =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (elapsed > 3.0 || tty) {
-        std::fprintf(stderr, "[bench] %zu/%zu registrations, %.0f s elapsed\n", rows.size(),
-                     jobs.size() * o.repeat, elapsed);
+      // Methods alternate within a repeat, so that machine noise spreads over all of them.
+      for (const MethodSpec& method : methods) {
+        MethodSpec m = method;
+        m.sgd.seed = method.sgd.seed + rep;
+        const MethodRun run = run_method(m, source, reference_cloud, T_init);
+        const RegistrationResult& r = run.result;
+        Row row;
+        row.pairs_file = file;
+        row.line = pair.line;
+        row.source = pair.source.filename().string();
+        row.reference = pair.reference.filename().string();
+        row.method = m.name;
+        row.repeat = rep;
+        row.t_err = translation_error(r.T_reference_source, T_gt);
+        row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
+        row.r_err_geo_deg =
+            rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
+        row.init_t_err = translation_error(T_init, T_gt);
+        row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
+        row.build_ms = run.prepare_ms;
+        row.align_ms = r.time_ms;
+        row.iterations = r.iterations;
+        row.points = r.points_processed;
+        row.source_points = run.source_points;
+        row.converged = r.converged;
+        row.degenerate = r.degenerate;
+        row.stop_reason = std::string(to_string(r.stop_reason));
+        const std::string name = row.source + " <- " + row.reference;
+        std::printf("%-4zu %-36s %-9s %3zu %10s %10s %9s %9s %6zu %9zu %4s\n", j + 1,
+                    name.substr(0, 36).c_str(), m.name.c_str(), rep, fmt(row.t_err).c_str(),
+                    fmt(row.r_err_sum).c_str(), fmt(row.r_err_geo_deg).c_str(),
+                    fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
+                    row.converged ? "yes" : "no");
+        std::fflush(stdout);
+        if (csv) {
+          std::fprintf(
+              csv,
+              "%s,%zu,%s,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s,%d\n",
+              file.c_str(), row.line, pair.source.string().c_str(), pair.reference.string().c_str(),
+              m.name.c_str(), rep, row.t_err, row.r_err_sum, row.r_err_geo_deg, row.init_t_err,
+              row.init_r_geo_deg, row.build_ms, row.align_ms, row.build_ms + row.align_ms,
+              row.iterations, row.points, row.source_points, row.converged ? 1 : 0,
+              row.stop_reason.c_str(), row.degenerate ? 1 : 0);
+        }
+        rows.push_back(std::move(row));
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (elapsed > 3.0 || tty) {
+          std::fprintf(stderr, "[bench] %zu/%zu registrations, %.0f s elapsed\n", rows.size(),
+                       total, elapsed);
+        }
       }
     }
   }
 
-  std::vector<double> te, rs, rg, tm, pts, its;
-  std::size_t converged = 0;
-  for (const auto& r : rows) {
-    te.push_back(r.t_err);
-    rs.push_back(r.r_err_sum);
-    rg.push_back(r.r_err_geo_deg);
-    tm.push_back(r.build_ms + r.align_ms);
-    pts.push_back(static_cast<double>(r.points));
-    its.push_back(static_cast<double>(r.iterations));
-    converged += r.converged ? 1 : 0;
-  }
-  const auto line = [](const char* what, const Stats& s, const char* unit) {
-    std::printf("  %-28s median %-10s mean %s +- %s %s\n", what, fmt(s.median).c_str(),
-                fmt(s.mean).c_str(), fmt(s.std).c_str(), unit);
-  };
-  std::printf("\nsummary over %zu registrations (%s, optimizer %s, m = %zu)\n", rows.size(),
-              o.settings.preset.c_str(), std::string(to_string(settings.optimizer.type)).c_str(),
-              settings.batch_size);
-  line("translation error", stats_of(te), "m");
-  line("rotation error (sum |d rpy|)", stats_of(rs), "rad");
-  line("rotation error (geodesic)", stats_of(rg), "deg");
-  line("time (kd-tree + registration)", stats_of(tm), "ms, file I/O excluded");
-  line("points processed", stats_of(pts), "");
-  line("iterations", stats_of(its), "");
-  std::printf("  converged: %zu/%zu\n", converged, rows.size());
-  for (const auto& th : thresholds) {
-    std::size_t ok = 0;
+  for (const MethodSpec& m : methods) {
+    std::vector<const Row*> mine;
     for (const auto& r : rows) {
-      ok += (r.t_err < th.translation_m && r.r_err_geo_deg < th.rotation_deg) ? 1 : 0;
+      if (r.method == m.name) mine.push_back(&r);
     }
-    std::printf("  success (t_err < %s m and r_geo < %s deg): %zu/%zu = %s %%\n",
-                fmt(th.translation_m).c_str(), fmt(th.rotation_deg).c_str(), ok, rows.size(),
-                fmt(100.0 * static_cast<double>(ok) / static_cast<double>(rows.size()), 3).c_str());
+    std::string label = "method " + m.name;
+    if (m.stochastic) {
+      label += ", " + o.settings.preset + " settings, optimizer " +
+               std::string(to_string(m.sgd.optimizer.type)) +
+               ", m = " + std::to_string(m.sgd.batch_size);
+    }
+    print_summary(label, mine, thresholds);
   }
+  if (methods.size() > 1) print_comparison(method_list, rows, thresholds);
 }
 
 }  // namespace
@@ -292,6 +371,7 @@ void add_bench_command(CLI::App& app) {
                   "Success threshold TRANS_M,ROT_DEG (translation error and geodesic rotation "
                   "error both below); repeat the option for several [default: 0.05,1 and 2,5]")
       ->take_all();
+  add_method_options(*cmd, o->settings, true);
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });
 }

@@ -53,7 +53,9 @@ nlohmann::json result_to_json(const RegistrationResult& r) {
           {"inlier_ratio", r.inlier_ratio},
           {"inlier_rmse_m", r.inlier_rmse_m},
           {"final_max_distance_m", r.final_max_distance_m},
-          {"scale_m", r.scale_m}};
+          {"scale_m", r.scale_m},
+          {"constraint_ratio", r.constraint_ratio},
+          {"degenerate", r.degenerate}};
 }
 
 }  // namespace sgdicp::cli

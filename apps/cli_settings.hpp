@@ -1,12 +1,19 @@
 #pragma once
 // Options shared by `sgdicp register` and `sgdicp bench`: every setting of SgdSettings, with its
 // unit and default (taken from the library, so help and behaviour never disagree).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "sgdicp/batch_icp.hpp"
+#include "sgdicp/features.hpp"
+#include "sgdicp/preprocessing.hpp"
 #include "sgdicp/registration.hpp"
 
 namespace sgdicp::cli {
@@ -29,12 +36,84 @@ struct SettingsOptions {
   std::optional<bool> average;
   std::optional<std::size_t> evaluation_points;
   std::optional<std::string> scaling_origin;
+  // Methods, costs and robustness.
+  std::string method = "sgd";
+  std::optional<std::string> kernel;
+  std::optional<double> kernel_scale;
+  std::optional<double> trim;
+  std::optional<std::string> preconditioner;
+  std::optional<std::size_t> neighbors;
+  std::optional<double> damping;
+  std::optional<bool> check_degeneracy;
+  // Preprocessing.
+  std::optional<double> voxel_size;
+  std::optional<double> random_ratio;
 };
+
+/// The methods of `--method`, in the order --help lists them.
+inline const std::vector<std::string>& method_names() {
+  static const std::vector<std::string> names = {"sgd", "sgd-plane", "sgd-gicp",
+                                                 "icp", "icp-plane", "gicp"};
+  return names;
+}
 
 inline std::string num(double v) {
   std::ostringstream s;
   s << v;
   return s.str();
+}
+
+/// Options that choose the method and the cost-independent parts (kernel, trimming, features).
+inline void add_method_options(CLI::App& app, SettingsOptions& o, bool several) {
+  const BatchSettings b{};
+  const SgdSettings d{};
+  const std::string method_help =
+      "Method: sgd (SGD-ICP, point-to-point: the paper), sgd-plane (SGD-ICP on point-to-plane), "
+      "sgd-gicp (SGD-ICP on plane-to-plane), icp (batch point-to-point, closed-form SVD step), "
+      "icp-plane (batch point-to-plane, Levenberg-Marquardt), gicp (batch plane-to-plane, "
+      "Levenberg-Marquardt)";
+  if (several) {
+    app.add_option("--method", o.method,
+                   method_help +
+                       "; several separated by commas are compared in one run "
+                       "[default: sgd]");
+  } else {
+    app.add_option("--method", o.method, method_help + " [default: sgd]")
+        ->check(CLI::IsMember(method_names()));
+  }
+  app.add_option("--kernel", o.kernel,
+                 "Robust kernel on the pair residuals: none, huber, cauchy, geman-mcclure, "
+                 "welsch [default: none]")
+      ->check(CLI::IsMember({"none", "huber", "cauchy", "geman-mcclure", "welsch"}));
+  app.add_option("--kernel-scale", o.kernel_scale,
+                 "Kernel scale c (residual size where down-weighting starts), in the unit of "
+                 "--max-distance-unit [default: " +
+                     num(d.kernel_scale.value) + " scaled]");
+  app.add_option("--trim", o.trim,
+                 "Keep only this fraction of the pairs (per mini-batch for SGD, per iteration "
+                 "for batch methods), the closest ones: trimmed ICP for partial overlap, in (0, 1] "
+                 "[default: 1]");
+  app.add_option("--preconditioner", o.preconditioner,
+                 "SGD methods: 'none' (A = I, the paper) or 'gauss-newton' (A = inverse of the "
+                 "averaged mini-batch Gauss-Newton matrix; same as --optimizer gauss-newton) "
+                 "[default: none]")
+      ->check(CLI::IsMember({"none", "gauss-newton"}));
+  app.add_option("--neighbors", o.neighbors,
+                 "Plane costs: neighbours per point for normals and covariances [default: " +
+                     std::to_string(d.neighborhood.k) + "]");
+  app.add_option("--damping", o.damping,
+                 "icp-plane, gicp: initial Levenberg-Marquardt damping, relative to the mean "
+                 "diagonal, 0 = Gauss-Newton [default: " +
+                     num(b.initial_damping) + "]");
+  app.add_option("--check-degeneracy", o.check_degeneracy,
+                 "Check the final alignment for degenerate geometry (plane, corridor) and report "
+                 "it [default: true]");
+  app.add_option("--voxel-size", o.voxel_size,
+                 "Downsample both clouds to one point per voxel of this size, metres, before "
+                 "registering (timed) [default: off]");
+  app.add_option("--random-ratio", o.random_ratio,
+                 "Keep this random fraction of each cloud's points before registering (seeded "
+                 "by --seed), in (0, 1] [default: off]");
 }
 
 inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
@@ -66,15 +145,20 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                      both(std::to_string(d.batch_size), std::to_string(p.batch_size)));
   app.add_option("--max-distance,-d", o.max_distance,
                  "Correspondence rejection distance d_max, in the unit of --max-distance-unit" +
-                     both(num(d.max_correspondence_distance.value) + " scaled",
+                     both(num(d.max_correspondence_distance.value) + " scaled for SGD methods, " +
+                              num(BatchSettings{}.max_correspondence_distance.value) +
+                              " scaled for batch methods",
                           num(p.max_correspondence_distance.value) + " scaled"));
   app.add_option("--max-distance-unit", o.max_distance_unit,
                  "Unit of --max-distance and --min-distance: 'scaled' (fraction of the largest "
                  "side of the joint bounding box) or 'm' (metres) [default: scaled]")
       ->check(CLI::IsMember({"scaled", "m"}));
   app.add_option("--max-iterations", o.max_iterations,
-                 "Iteration (mini-batch) limit; reaching it reports 'not converged'" +
-                     both(std::to_string(d.max_iterations), std::to_string(p.max_iterations)));
+                 "Iteration limit (mini-batches for SGD methods, passes for batch methods); "
+                 "reaching it reports 'not converged'" +
+                     both(std::to_string(d.max_iterations) + " for SGD methods, " +
+                              std::to_string(BatchSettings{}.max_iterations) + " for batch methods",
+                          std::to_string(p.max_iterations)));
   app.add_option("--seed", o.seed,
                  "Seed of the mini-batch sampler (same seed, same result)" +
                      both(std::to_string(d.seed), std::to_string(p.seed)));
@@ -111,7 +195,8 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
   app.add_option(
       "--translation-tolerance", o.translation_tolerance,
       "Convergence: a window whose steps each move the translation less than this "
-      "also ends a stage, scaled units" +
+      "also ends a stage (batch methods: an iteration that moves it less converges), "
+      "scaled units" +
           both(num(d.convergence.translation_tolerance), num(p.convergence.translation_tolerance)));
   app.add_option(
       "--rotation-tolerance", o.rotation_tolerance,
@@ -204,6 +289,116 @@ inline SgdSettings make_settings(const SettingsOptions& o) {
   }
   s.validate();
   return s;
+}
+
+}  // namespace sgdicp::cli
+
+namespace sgdicp::cli {
+
+/// One method of --method with all its settings resolved.
+struct MethodSpec {
+  std::string name;
+  bool stochastic = true;
+  SgdSettings sgd;
+  BatchSettings batch;
+  std::optional<double> voxel_size;
+  std::optional<double> random_ratio;
+};
+
+/// Resolves a --method name with the shared options. Throws InvalidSettingsError.
+inline MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
+  const auto& names = method_names();
+  if (std::find(names.begin(), names.end(), name) == names.end()) {
+    throw InvalidSettingsError("unknown method '" + name +
+                               "' (expected sgd, sgd-plane, sgd-gicp, icp, icp-plane or gicp)");
+  }
+  MethodSpec m;
+  m.name = name;
+  m.stochastic = name.rfind("sgd", 0) == 0;
+  const CostType cost = name.find("gicp") != std::string::npos    ? CostType::plane_to_plane
+                        : name.find("plane") != std::string::npos ? CostType::point_to_plane
+                                                                  : CostType::point_to_point;
+  const auto unit = o.max_distance_unit == "m" ? Distance::Unit::metres : Distance::Unit::scaled;
+  // Both solvers default to no kernel.
+  const KernelType kernel = o.kernel ? kernel_from_string(*o.kernel) : KernelType::none;
+
+  m.sgd = make_settings(o);
+  m.sgd.cost = cost;
+  if (o.preconditioner && *o.preconditioner == "gauss-newton") {
+    m.sgd.optimizer.type = OptimizerType::gauss_newton;
+    if (!o.learning_rate) m.sgd.optimizer.learning_rate = 1.0;
+  }
+  m.sgd.kernel = kernel;
+  if (o.kernel_scale) m.sgd.kernel_scale = {*o.kernel_scale, unit};
+  if (o.trim) m.sgd.trim_ratio = *o.trim;
+  if (o.neighbors) m.sgd.neighborhood.k = *o.neighbors;
+  if (o.check_degeneracy) m.sgd.check_degeneracy = *o.check_degeneracy;
+
+  BatchSettings& b = m.batch;
+  b.cost = cost;
+  if (o.max_distance) b.max_correspondence_distance = {*o.max_distance, unit};
+  if (o.max_iterations) b.max_iterations = *o.max_iterations;
+  b.kernel = kernel;
+  if (o.kernel_scale) b.kernel_scale = {*o.kernel_scale, unit};
+  if (o.trim) b.trim_ratio = *o.trim;
+  if (o.neighbors) b.neighborhood.k = *o.neighbors;
+  if (o.damping) b.initial_damping = *o.damping;
+  if (o.check_degeneracy) b.check_degeneracy = *o.check_degeneracy;
+  if (o.evaluation_points) b.evaluation_points = *o.evaluation_points;
+  if (o.translation_tolerance) b.translation_tolerance = *o.translation_tolerance;
+  if (o.rotation_tolerance) b.rotation_tolerance = *o.rotation_tolerance;
+
+  m.voxel_size = o.voxel_size;
+  m.random_ratio = o.random_ratio;
+  if (m.voxel_size && !(*m.voxel_size > 0.0 && std::isfinite(*m.voxel_size))) {
+    throw InvalidSettingsError("--voxel-size must be positive and finite");
+  }
+  if (m.random_ratio && !(*m.random_ratio > 0.0 && *m.random_ratio <= 1.0)) {
+    throw InvalidSettingsError("--random-ratio must be in (0, 1]");
+  }
+  m.sgd.validate();
+  b.validate();
+  return m;
+}
+
+struct MethodRun {
+  RegistrationResult result;
+  double prepare_ms = 0.0;  ///< downsampling + KD-tree build + reference normals/covariances
+  std::size_t source_points = 0;
+  std::size_t reference_points = 0;
+};
+
+/// Runs one method: downsampling (if asked), KD-tree, reference features, registration; all
+/// but file I/O is timed.
+inline MethodRun run_method(const MethodSpec& m, const PointCloud& source,
+                            const PointCloud& reference, const Eigen::Matrix4d& T_init,
+                            bool record_trace = false) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto reduce = [&](const PointCloud& cloud) {
+    PointCloud out = m.voxel_size ? voxel_downsample(cloud, *m.voxel_size) : cloud;
+    if (m.random_ratio) out = random_downsample_ratio(out, *m.random_ratio, m.sgd.seed);
+    return out;
+  };
+  const bool reduced = m.voxel_size || m.random_ratio;
+  std::optional<PointCloud> small_source;
+  if (reduced) small_source = reduce(source);
+  const PointCloud& src = small_source ? *small_source : source;
+  ReferenceIndex index(reduced ? reduce(reference) : reference);
+  prepare_reference(index, m.stochastic ? m.sgd.cost : m.batch.cost,
+                    m.stochastic ? m.sgd.neighborhood : m.batch.neighborhood);
+  MethodRun run;
+  run.prepare_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  run.source_points = src.size();
+  run.reference_points = index.size();
+  if (m.stochastic) {
+    SgdSettings s = m.sgd;
+    s.record_trace = record_trace;
+    run.result = align(src, index, s, T_init);
+  } else {
+    run.result = align_batch(src, index, m.batch, T_init);
+  }
+  return run;
 }
 
 }  // namespace sgdicp::cli

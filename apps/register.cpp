@@ -48,21 +48,15 @@ void write_trace_csv(const std::string& path, const RegistrationResult& r) {
 }
 
 void run(const RegisterOptions& o) {
-  const SgdSettings settings = make_settings(o.settings);
+  const MethodSpec method = make_method(o.settings.method, o.settings);
   const Eigen::Matrix4d T_init = o.init.empty() ? Eigen::Matrix4d::Identity() : parse_init(o.init);
   std::optional<Eigen::Matrix4d> T_gt;
   if (!o.ground_truth.empty()) T_gt = parse_init(o.ground_truth);
-  SgdSettings run_settings = settings;
-  run_settings.record_trace = !o.trace.empty();
-
   const PointCloud source = load_cloud(o.source, "source", !o.json);
   const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json);
-  const auto build_start = std::chrono::steady_clock::now();
-  const ReferenceIndex reference(reference_cloud);
-  const double build_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
-          .count();
-  const RegistrationResult result = align(source, reference, run_settings, T_init);
+  const MethodRun run = run_method(method, source, reference_cloud, T_init, !o.trace.empty());
+  const RegistrationResult& result = run.result;
+  const double build_ms = run.prepare_ms;
 
   if (!o.output.empty()) write_transform(o.output, result.T_reference_source);
   if (!o.trace.empty()) write_trace_csv(o.trace, result);
@@ -80,8 +74,9 @@ void run(const RegisterOptions& o) {
   if (o.json) {
     nlohmann::json j = result_to_json(result);
     j["build_ms"] = build_ms;
-    j["source_points"] = source.size();
-    j["reference_points"] = reference_cloud.size();
+    j["method"] = method.name;
+    j["source_points"] = run.source_points;
+    j["reference_points"] = run.reference_points;
     if (T_gt) {
       j["translation_error_m"] = translation_error(result.T_reference_source, *T_gt);
       j["rotation_error_euler_rad"] = rotation_error_euler_sum(result.T_reference_source, *T_gt);
@@ -91,20 +86,26 @@ void run(const RegisterOptions& o) {
     std::cout << j.dump(2) << '\n';
     return;
   }
-  std::cout << "T_reference_source =\n" << format_transform(result.T_reference_source);
+  std::cout << "method: " << method.name << "\nT_reference_source =\n"
+            << format_transform(result.T_reference_source);
   std::cout << std::setprecision(4) << "converged: " << (result.converged ? "yes" : "no") << " ("
             << result.message << ")\n"
             << "iterations: " << result.iterations
             << ", points processed: " << result.points_processed << " (" << std::fixed
             << std::setprecision(2)
-            << static_cast<double>(result.points_processed) / static_cast<double>(source.size())
+            << static_cast<double>(result.points_processed) / static_cast<double>(run.source_points)
             << " passes over " << source.size() << " source points)\n"
             << "inliers: " << result.inliers << " of " << result.evaluated_points << " ("
             << std::setprecision(1) << 100.0 * result.inlier_ratio << " %) within "
             << std::setprecision(4) << result.final_max_distance_m << " m, inlier RMSE "
             << result.inlier_rmse_m << " m\n"
             << "time: " << std::setprecision(1) << result.time_ms << " ms registration + "
-            << build_ms << " ms kd-tree build\n";
+            << build_ms << " ms preparation (kd-tree"
+            << (method.voxel_size || method.random_ratio ? ", downsampling" : "")
+            << (needs_reference_normals(method.sgd.cost) || needs_covariances(method.sgd.cost)
+                    ? ", normals/covariances"
+                    : "")
+            << ")\n";
   if (T_gt) {
     std::cout << std::setprecision(4) << "error vs ground truth: translation "
               << translation_error(result.T_reference_source, *T_gt) << " m, rotation "
@@ -114,6 +115,10 @@ void run(const RegisterOptions& o) {
               << " rad (sum of |d roll|, |d pitch|, |d yaw|)\n";
   }
   if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
+  if (result.degenerate) {
+    std::cerr << "warning: degenerate geometry (constraint ratio " << result.constraint_ratio
+              << "): the transform is not constrained along some motion\n";
+  }
   if (!result.converged) {
     std::cerr << "warning: the registration did not converge: " << result.message << '\n';
   }
@@ -148,6 +153,7 @@ void add_register_command(CLI::App& app) {
   cmd->add_option(
       "--trace", o->trace,
       "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");
+  add_method_options(*cmd, o->settings, false);
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });
 }

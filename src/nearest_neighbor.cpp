@@ -6,6 +6,7 @@
 #include <nanoflann.hpp>
 
 #include "sgdicp/error.hpp"
+#include "sgdicp/preprocessing.hpp"
 
 namespace sgdicp {
 namespace {
@@ -110,6 +111,15 @@ std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,
   impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (!result.found()) return std::nullopt;
   return Neighbor{result.index(), result.worstDist()};
+}
+
+void ReferenceIndex::estimate_covariances(const NeighborhoodSettings& settings) {
+  // The tree points at impl_->cloud.points, so compute into a copy and move the results back.
+  PointCloud copy;
+  copy.points = impl_->cloud.points;
+  sgdicp::estimate_covariances(copy, *this, settings);
+  impl_->cloud.normals = std::move(copy.normals);
+  impl_->cloud.covariances = std::move(copy.covariances);
 }
 
 void ReferenceIndex::k_nearest(const Eigen::Vector3f& query, std::size_t k,

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
+#include "checks.hpp"
 #include "sgdicp/error.hpp"
-#include "sgdicp/point_to_point.hpp"
+#include "sgdicp/evaluation.hpp"
+#include "sgdicp/features.hpp"
 #include "sgdicp/pose.hpp"
 #include "sgdicp/sampler.hpp"
 #include "sgdicp/scaling.hpp"
@@ -72,6 +75,12 @@ void SgdSettings::validate() const {
     throw InvalidSettingsError("refinement minimum distance must be positive and finite");
   }
   if (max_iterations == 0) throw InvalidSettingsError("max iterations must be at least 1");
+  if (!(trim_ratio > 0.0 && trim_ratio <= 1.0)) {
+    throw InvalidSettingsError("trim ratio must be in (0, 1]");
+  }
+  if (!(kernel_scale.value > 0.0) || !std::isfinite(kernel_scale.value)) {
+    throw InvalidSettingsError("kernel scale must be positive and finite");
+  }
 }
 
 namespace {
@@ -83,19 +92,52 @@ double median_of(std::vector<float>& values) {
   return static_cast<double>(*mid);
 }
 
-void check_source(const PointCloud& source, std::size_t batch_size) {
-  if (source.empty()) throw InvalidInputError("source cloud is empty");
-  if (source.size() > std::numeric_limits<std::uint32_t>::max()) {
-    throw InvalidInputError("source cloud has more than 2^32-1 points");
+const Eigen::Vector3f kNoNormal = Eigen::Vector3f::Zero();
+const Eigen::Matrix3f kNoCovariance = Eigen::Matrix3f::Identity();
+
+// One mini-batch of the paper's cost (Algorithm 1, lines 2-8): each source point moved by the
+// current pose, paired with its nearest reference point within d_max, added to the gradient.
+// The tree lives in metres, the pose in scaled space. Kept apart from align() so that the
+// compiler inlines the small Eigen products of this hot loop (measured with callgrind).
+void accumulate_point_to_point(const PointCloud& source, const ReferenceIndex& reference,
+                               const std::vector<std::uint32_t>& batch,
+                               const EulerPoseJacobian& pose, const Eigen::Vector3d& o, double k,
+                               float d_max_sq_m, CostAccumulator& accumulator,
+                               std::vector<float>& distances) {
+  const PointCloud& ref = reference.cloud();
+  for (const std::uint32_t i : batch) {
+    const Eigen::Vector3d s = (source.points[i].cast<double>() - o) / k;
+    const Eigen::Vector3d moved = pose.transform(s);
+    const Eigen::Vector3f query = (moved * k + o).cast<float>();
+    const auto nn = reference.nearest(query, d_max_sq_m);
+    if (!nn) continue;
+    const Eigen::Vector3d r = (ref.points[nn->index].cast<double>() - o) / k;
+    accumulator.add_point_to_point(pose.jacobian(s), moved - r);
+    distances.push_back(std::sqrt(nn->squared_distance) / static_cast<float>(k));
   }
-  if (source.size() < batch_size) {
-    throw InvalidInputError("source cloud has " + std::to_string(source.size()) +
-                            " points, fewer than the mini-batch size " +
-                            std::to_string(batch_size));
-  }
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    if (!source.points[i].allFinite()) {
-      throw InvalidInputError("source cloud has a non-finite point at index " + std::to_string(i));
+}
+
+// A pair found for a mini-batch, kept for trimming and for the costs that need more than the
+// two points.
+struct Pair {
+  Eigen::Vector3d s;      // scaled source point
+  Eigen::Vector3d moved;  // moved by the current pose
+  std::uint32_t source_index;
+  std::uint32_t reference_index;
+  float distance;  // scaled
+};
+
+void collect_pairs(const PointCloud& source, const ReferenceIndex& reference,
+                   const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
+                   const Eigen::Vector3d& o, double k, float d_max_sq_m, std::vector<Pair>& pairs) {
+  pairs.clear();
+  for (const std::uint32_t i : batch) {
+    const Eigen::Vector3d s = (source.points[i].cast<double>() - o) / k;
+    const Eigen::Vector3d moved = pose.transform(s);
+    const Eigen::Vector3f query = (moved * k + o).cast<float>();
+    if (const auto nn = reference.nearest(query, d_max_sq_m)) {
+      pairs.push_back(
+          {s, moved, i, nn->index, std::sqrt(nn->squared_distance) / static_cast<float>(k)});
     }
   }
 }
@@ -106,19 +148,24 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
   const auto start = std::chrono::steady_clock::now();
   settings.validate();
-  check_source(source, settings.batch_size);
-  if (!is_rigid_transform(T_init, 1e-4)) {
-    throw InvalidInputError(
-        "initial transform is not a finite rigid transform (rotation part "
-        "must be orthonormal with determinant 1, last row 0 0 0 1)");
+  detail::check_source(source, settings.batch_size, "the mini-batch size");
+  detail::check_initial_transform(T_init);
+  check_reference_features(reference, settings.cost);
+  // Plane-to-plane also needs the source's covariances: estimated here (and timed) if missing.
+  std::optional<PointCloud> source_with_features;
+  if (needs_covariances(settings.cost) && !source.has_covariances()) {
+    source_with_features = source;
+    estimate_covariances(*source_with_features, settings.neighborhood);
   }
+  const PointCloud& src = source_with_features ? *source_with_features : source;
 
   BoundingBox source_box;
-  source_box.extend(source);
+  source_box.extend(src);
   const UnitCubeScaling scaling =
       UnitCubeScaling::from_boxes(source_box, reference.bounding_box(), settings.scaling_origin);
   const double k = scaling.scale();
   const Eigen::Vector3d o = scaling.offset();
+  const PointCloud& ref = reference.cloud();
 
   RegistrationResult result;
   result.scale_m = k;
@@ -126,14 +173,20 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   // Matrices read from text carry few digits: project onto the nearest rotation.
   PoseVector theta = pose_from_transform(scaling.to_scaled(orthonormalized(T_init)));
   Optimizer optimizer(settings.optimizer);
-  EpochSampler sampler(static_cast<std::uint32_t>(source.size()), settings.seed);
+  EpochSampler sampler(static_cast<std::uint32_t>(src.size()), settings.seed);
 
   double d_max = settings.max_correspondence_distance.to_scaled(k);  // scaled units
   const double d_min = std::min(d_max, settings.refinement.min_distance.to_scaled(k));
+  const double kernel_scale = settings.kernel_scale.to_scaled(k);
   double lr_scale = 1.0;
+  // The paper's pair cost without kernel or trimming takes the short path of the hot loop.
+  const bool plain = settings.cost == CostType::point_to_point &&
+                     settings.kernel == KernelType::none && settings.trim_ratio >= 1.0;
 
   std::vector<std::uint32_t> batch;
   batch.reserve(settings.batch_size);
+  std::vector<Pair> pairs;
+  pairs.reserve(settings.batch_size);
   // Scaled correspondence distances of the current and the last complete window of iterations.
   std::vector<float> distances;
   std::vector<float> last_window_distances;
@@ -157,23 +210,39 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
     // Algorithm 1, lines 2-8: next mini-batch, moved by theta_{t-1}, paired with its nearest
     // reference point within d_max. The tree lives in metres; the pose lives in scaled space.
     sampler.next_batch(settings.batch_size, batch);
-    PointToPointGradient grad(theta, optimizer.needs_hessian());
+    const EulerPoseJacobian pose(theta);
+    CostAccumulator accumulator(settings.kernel, kernel_scale, optimizer.needs_hessian());
     const auto d_max_sq_m = static_cast<float>(d_max * k * d_max * k);
-    std::size_t inliers = 0;
-    for (const std::uint32_t i : batch) {
-      const Eigen::Vector3d s = (source.points[i].cast<double>() - o) / k;
-      const Eigen::Vector3d moved = grad.transform(s);
-      const Eigen::Vector3f query = (moved * k + o).cast<float>();
-      const auto nn = reference.nearest(query, d_max_sq_m);
-      if (!nn) continue;
-      const Eigen::Vector3d r = (reference.cloud().points[nn->index].cast<double>() - o) / k;
-      grad.add(s, moved, r);
-      distances.push_back(std::sqrt(nn->squared_distance) / static_cast<float>(k));
-      ++inliers;
+    if (plain) {
+      accumulate_point_to_point(src, reference, batch, pose, o, k, d_max_sq_m, accumulator,
+                                distances);
+    } else {
+      collect_pairs(src, reference, batch, pose, o, k, d_max_sq_m, pairs);
+      // Trimming: keep the closest fraction of the batch's pairs.
+      if (settings.trim_ratio < 1.0 && !pairs.empty()) {
+        const auto keep = static_cast<std::size_t>(
+            std::ceil(settings.trim_ratio * static_cast<double>(pairs.size())));
+        std::nth_element(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(keep - 1),
+                         pairs.end(),
+                         [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+        pairs.resize(keep);
+      }
+      for (const Pair& pr : pairs) {
+        const Eigen::Vector3d r = (ref.points[pr.reference_index].cast<double>() - o) / k;
+        const Eigen::Matrix3d omega = information_matrix(
+            settings.cost, ref.has_normals() ? ref.normals[pr.reference_index] : kNoNormal,
+            ref.has_covariances() ? ref.covariances[pr.reference_index] : kNoCovariance,
+            src.has_covariances() ? src.covariances[pr.source_index] : kNoCovariance,
+            pose.rotation());
+        accumulator.add(pose.jacobian(pr.s), pr.moved - r, omega);
+        distances.push_back(pr.distance);
+      }
     }
+    const std::size_t inliers = accumulator.pairs();
     // Lines 9-10: one optimiser step on the mean cost over the kept pairs (eq. 6, 7).
-    const PoseVector gradient = grad.gradient(settings.batch_size);
-    const PoseVector step = optimizer.step(gradient, grad.hessian(settings.batch_size), lr_scale);
+    const PoseVector gradient = accumulator.gradient(settings.batch_size);
+    const PoseVector step =
+        optimizer.step(gradient, accumulator.hessian(settings.batch_size), lr_scale);
     theta += step;
     result.iterations = it + 1;
     result.points_processed += batch.size();
@@ -182,7 +251,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       result.trace.push_back({result.iterations, result.points_processed,
                               scaling.to_metric(transform_from_pose(theta)),
                               settings.optimizer.learning_rate * lr_scale, d_max * k, inliers,
-                              grad.cost(settings.batch_size)});
+                              accumulator.cost(settings.batch_size)});
     }
     // Both clouds lie in the unit box of the scaled space: a translation of 10 box sizes can
     // only come from steps that blew up.
@@ -247,28 +316,9 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
 
   result.T_reference_source = scaling.to_metric(transform_from_pose(returned));
   result.final_max_distance_m = d_max * k;
-
-  // Final inlier statistics on an evenly strided sample of the source.
-  const std::size_t n = source.size();
-  const std::size_t stride = settings.evaluation_points == 0
-                                 ? 1
-                                 : std::max<std::size_t>(1, n / settings.evaluation_points);
-  const Eigen::Matrix3f r = result.T_reference_source.topLeftCorner<3, 3>().cast<float>();
-  const Eigen::Vector3f t = result.T_reference_source.topRightCorner<3, 1>().cast<float>();
-  const auto final_sq =
-      static_cast<float>(result.final_max_distance_m * result.final_max_distance_m);
-  double sum_sq = 0.0;
-  for (std::size_t i = 0; i < n; i += stride) {
-    ++result.evaluated_points;
-    if (const auto nn = reference.nearest(r * source.points[i] + t, final_sq)) {
-      ++result.inliers;
-      sum_sq += nn->squared_distance;
-    }
-  }
-  result.inlier_ratio =
-      static_cast<double>(result.inliers) / static_cast<double>(result.evaluated_points);
-  result.inlier_rmse_m =
-      result.inliers > 0 ? std::sqrt(sum_sq / static_cast<double>(result.inliers)) : 0.0;
+  evaluate_alignment(src, reference, result.final_max_distance_m,
+                     EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
+                     result);
   result.time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -277,7 +327,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
 RegistrationResult align(const PointCloud& source, const PointCloud& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
   settings.validate();
-  const ReferenceIndex index(reference);
+  ReferenceIndex index(reference);
+  prepare_reference(index, settings.cost, settings.neighborhood);
   return align(source, index, settings, T_init);
 }
 

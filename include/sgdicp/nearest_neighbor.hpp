@@ -19,6 +19,8 @@ struct Neighbor {
   float squared_distance = 0.0F;  ///< metres^2
 };
 
+struct NeighborhoodSettings;
+
 struct KdTreeSettings {
   /// Points per leaf. Small leaves favour single-nearest queries; 10 is nanoflann's default.
   std::size_t leaf_size = 10;
@@ -45,9 +47,14 @@ class ReferenceIndex {
       const Eigen::Vector3f& query,
       float max_squared_distance = std::numeric_limits<float>::max()) const;
 
+  /// Estimates normals and covariances of the reference over this tree (preprocessing.hpp),
+  /// stored in cloud(). Not thread-safe: call it before sharing the index between threads.
+  void estimate_covariances(const NeighborhoodSettings& settings);
+
   /// The k nearest reference points to query, closest first (fewer if the cloud is smaller).
   /// `neighbors` is cleared and refilled; pass the same vector again to avoid allocations.
-  void k_nearest(const Eigen::Vector3f& query, std::size_t k, std::vector<Neighbor>& neighbors) const;
+  void k_nearest(const Eigen::Vector3f& query, std::size_t k,
+                 std::vector<Neighbor>& neighbors) const;
 
  private:
   struct Impl;

@@ -8,9 +8,13 @@
 #include <Eigen/Core>
 
 #include "sgdicp/convergence.hpp"
+#include "sgdicp/cost.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
 #include "sgdicp/optimizer.hpp"
 #include "sgdicp/point_cloud.hpp"
+#include "sgdicp/preprocessing.hpp"
+#include "sgdicp/result.hpp"
+#include "sgdicp/robust_kernel.hpp"
 #include "sgdicp/scaling.hpp"
 
 namespace sgdicp {
@@ -54,6 +58,19 @@ struct SgdSettings {
   OptimizerSettings optimizer{OptimizerType::adam, 0.01};
   ConvergenceSettings convergence{};
   RefinementSettings refinement{};
+  /// Cost of a pair (cost.hpp): the paper's point-to-point, point-to-plane, or plane-to-plane
+  /// (GICP). The plane costs need normals / covariances (estimated with `neighborhood` when the
+  /// clouds lack them).
+  CostType cost = CostType::point_to_point;
+  /// Robust kernel on each pair's residual (robust_kernel.hpp) ...
+  KernelType kernel = KernelType::none;
+  /// ... and its scale: the residual size where it starts to down-weight.
+  Distance kernel_scale = Distance::scaled(0.01);
+  /// Keep only this fraction of each mini-batch's pairs, the closest ones (trimmed ICP,
+  /// Chetverikov et al. 2002), for partial overlap; 1 keeps all. In (0, 1].
+  double trim_ratio = 1.0;
+  /// Neighbourhoods for normals and covariances when a plane cost needs them.
+  NeighborhoodSettings neighborhood{};
   /// Origin of the scaled space = pivot of roll, pitch, yaw. The paper's lower corner couples
   /// rotation and translation strongly (a small rotation about a far corner is a large
   /// translation of the points); the box centre decouples them (docs/design.md).
@@ -69,6 +86,9 @@ struct SgdSettings {
   std::size_t evaluation_points = 10000;
   /// Record a per-iteration trace in the result.
   bool record_trace = false;
+  /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report
+  /// it in the result (degeneracy.hpp); costs about `evaluation_points` k-nearest queries.
+  bool check_degeneracy = true;
 
   /// The paper's settings: m = 160, d_max = 0.5 scaled, fixed step alpha = 2 (or Adam), no
   /// refinement, the last iterate returned, the paper's scaling origin (lower corner).
@@ -76,42 +96,6 @@ struct SgdSettings {
 
   /// Throws InvalidSettingsError naming the first absurd or contradictory setting.
   void validate() const;
-};
-
-enum class StopReason {
-  converged,           ///< the convergence test passed (after all refinement stages)
-  max_iterations,      ///< the iteration limit was reached first
-  no_correspondences,  ///< a whole window of mini-batches found no pair within d_max
-  diverged,            ///< the pose became non-finite or left the scaled space far behind
-};
-[[nodiscard]] std::string_view to_string(StopReason reason);
-
-struct TraceEntry {
-  std::size_t iteration = 0;
-  std::size_t points_processed = 0;    ///< source points drawn so far
-  Eigen::Matrix4d T_reference_source;  ///< metric pose after this iteration
-  double step_size = 0.0;              ///< effective learning rate of this iteration
-  double max_distance_m = 0.0;         ///< d_max used, metres
-  std::size_t inliers = 0;             ///< pairs kept in this mini-batch
-  double cost = 0.0;                   ///< mini-batch cost F, scaled units^2
-};
-
-struct RegistrationResult {
-  Eigen::Matrix4d T_reference_source = Eigen::Matrix4d::Identity();
-  bool converged = false;
-  StopReason stop_reason = StopReason::max_iterations;
-  std::string message;  ///< one line on why it stopped
-  std::size_t iterations = 0;
-  std::size_t points_processed = 0;   ///< source points drawn (iterations * batch size)
-  std::size_t stages = 0;             ///< convergence stages completed
-  std::size_t evaluated_points = 0;   ///< source points in the final inlier statistics
-  std::size_t inliers = 0;            ///< of those, with a reference point within d_max
-  double inlier_ratio = 0.0;          ///< inliers / evaluated_points
-  double inlier_rmse_m = 0.0;         ///< RMS distance of the inliers, metres
-  double final_max_distance_m = 0.0;  ///< d_max at the end (after refinement), metres
-  double scale_m = 0.0;               ///< metres per scaled unit
-  double time_ms = 0.0;               ///< wall time of the registration (not of the index build)
-  std::vector<TraceEntry> trace;      ///< per iteration, when record_trace is set
 };
 
 /// Registers source to the reference held by an index (built once, reusable, thread-safe).

@@ -1,0 +1,87 @@
+#pragma once
+// Preprocessing for the plane-based costs and for thinning clouds: local covariances and normals
+// from k-nearest neighbourhoods (point-to-plane, GICP), voxel-grid and random downsampling.
+// See docs/preprocessing.md for settings, costs and an example.
+#include <cstddef>
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/point_cloud.hpp"
+
+namespace sgdicp {
+
+/// How the local neighbourhood of every point is formed and summarised.
+struct NeighborhoodSettings {
+  /// Neighbours per point, including the point itself. In [3, 1000].
+  std::size_t k = 20;
+  /// Worker threads; 0 = std::thread::hardware_concurrency(). At most 1024. Results are
+  /// bit-identical for any thread count.
+  std::size_t num_threads = 0;
+  /// Replace each covariance by the GICP plane model (Segal et al. 2009):
+  /// C = V diag(epsilon, 1, 1) V^T, V the eigenvectors of the raw covariance, smallest first.
+  /// Regularized covariances are unitless; raw ones are in m^2.
+  bool regularize = true;
+  /// Variance along the normal in the plane model, relative to 1 in the plane. In (0, 1].
+  double epsilon = 1e-3;
+  /// Normals are flipped to face this point (metres): n.dot(viewpoint - p) >= 0.
+  Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+};
+
+/// Fills cloud.covariances and cloud.normals (one per point) from the k nearest neighbours of
+/// each point (itself included), found in a KD-tree built here over cloud.points.
+///
+/// Raw covariance: (1/n) sum (q - mean)(q - mean)^T over the n = min(k, size) neighbours, in m^2
+/// (the 1/n of PCL and Open3D). Normal: unit eigenvector of its smallest eigenvalue, facing the
+/// viewpoint. With settings.regularize, covariances are the unitless plane model instead.
+///
+/// Degenerate neighbourhoods (fewer than 3 points, all points identical, or collinear: the
+/// second-largest eigenvalue is at most 1e-6 of the largest or at float-resolution level) have
+/// no defined surface: their normal is set to zero (test with normal.isZero()), their regularized
+/// covariance to the identity (uninformative in every direction: such points neither dominate
+/// nor constrain a plane cost), and their raw covariance is the (finite, singular) sample one.
+/// No output is ever NaN.
+///
+/// Throws InvalidSettingsError for out-of-range settings, InvalidInputError for an empty cloud
+/// or a non-finite point. On throw the cloud is unchanged.
+void estimate_covariances(PointCloud& cloud, const NeighborhoodSettings& settings = {});
+
+/// The same, reusing a KD-tree built over exactly cloud.points (same size and same points, in
+/// the same order; otherwise InvalidInputError).
+void estimate_covariances(PointCloud& cloud, const ReferenceIndex& index,
+                          const NeighborhoodSettings& settings = {});
+
+/// The normals of estimate_covariances only: fills cloud.normals and leaves cloud.covariances
+/// untouched (no covariance is computed or stored). settings.regularize and epsilon are ignored
+/// for the output but still validated.
+void estimate_normals(PointCloud& cloud, const NeighborhoodSettings& settings = {});
+void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
+                      const NeighborhoodSettings& settings = {});
+
+/// One point per occupied cubic voxel of side voxel_size_m (metres): the centroid of the input
+/// points in it. Voxel (i, j, l) holds the points with floor(x / voxel_size_m) = i, etc.
+/// Output order is the order of each voxel's first point in the input, so the result is
+/// deterministic. Normals and covariances are not carried over (the output has none):
+/// estimate them after downsampling.
+///
+/// An empty cloud gives an empty cloud. Throws InvalidSettingsError when voxel_size_m is not
+/// positive and finite or so small that voxel indices would exceed 2^62 in magnitude, and
+/// InvalidInputError for a non-finite point.
+[[nodiscard]] PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m);
+
+/// `count` distinct points chosen uniformly at random without replacement (every subset of
+/// that size is equally likely), returned in input order with their normals and covariances
+/// when the cloud has them. Seeded and reproducible on any standard library (std::mt19937_64 raw
+/// output, our own bounded draws). count >= size returns a copy of the cloud; count = 0 returns
+/// an empty cloud. Throws InvalidInputError when normals or covariances are present but not one
+/// per point.
+[[nodiscard]] PointCloud random_downsample(const PointCloud& cloud, std::size_t count,
+                                           std::uint64_t seed);
+
+/// random_downsample with count = round(ratio * size), at least 1 for a non-empty cloud.
+/// Throws InvalidSettingsError unless ratio is in (0, 1].
+[[nodiscard]] PointCloud random_downsample_ratio(const PointCloud& cloud, double ratio,
+                                                 std::uint64_t seed);
+
+}  // namespace sgdicp

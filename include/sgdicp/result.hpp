@@ -1,0 +1,55 @@
+#pragma once
+// What a registration reports, whatever the method: the transform, why it stopped, how much
+// work it took, and how good and how well-constrained the final alignment is.
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace sgdicp {
+
+enum class StopReason {
+  converged,           ///< the convergence test passed (after all refinement stages)
+  max_iterations,      ///< the iteration limit was reached first
+  no_correspondences,  ///< a whole window of mini-batches found no pair within d_max
+  diverged,            ///< the pose became non-finite or left the scaled space far behind
+};
+[[nodiscard]] std::string_view to_string(StopReason reason);
+
+struct TraceEntry {
+  std::size_t iteration = 0;
+  std::size_t points_processed = 0;    ///< source points drawn so far
+  Eigen::Matrix4d T_reference_source;  ///< metric pose after this iteration
+  double step_size = 0.0;              ///< effective learning rate of this iteration
+  double max_distance_m = 0.0;         ///< d_max used, metres
+  std::size_t inliers = 0;             ///< pairs kept in this mini-batch
+  double cost = 0.0;                   ///< mini-batch cost F, scaled units^2
+};
+
+struct RegistrationResult {
+  Eigen::Matrix4d T_reference_source = Eigen::Matrix4d::Identity();
+  bool converged = false;
+  StopReason stop_reason = StopReason::max_iterations;
+  std::string message;  ///< one line on why it stopped
+  std::size_t iterations = 0;
+  std::size_t points_processed = 0;   ///< source points paired (SGD: iterations * batch size)
+  std::size_t stages = 0;             ///< convergence stages completed
+  std::size_t evaluated_points = 0;   ///< source points in the final inlier statistics
+  std::size_t inliers = 0;            ///< of those, with a reference point within d_max
+  double inlier_ratio = 0.0;          ///< inliers / evaluated_points
+  double inlier_rmse_m = 0.0;         ///< RMS distance of the inliers, metres
+  double final_max_distance_m = 0.0;  ///< d_max at the end (after refinement), metres
+  double scale_m = 0.0;               ///< metres per scaled unit
+  double time_ms = 0.0;               ///< wall time of the registration (not of the index build)
+  /// Geometry check of the final alignment (when requested): the smallest over the largest
+  /// eigenvalue of the point-to-plane information matrix of the inlier pairs, in the scaled
+  /// space. Near 0, some motion (sliding along a plane or a corridor, turning about an axis of
+  /// symmetry) is not constrained by the data, and the transform is not trustworthy along it.
+  double constraint_ratio = 0.0;
+  bool degenerate = false;        ///< constraint_ratio below the threshold: see `message`
+  std::vector<TraceEntry> trace;  ///< per iteration, when record_trace is set
+};
+
+}  // namespace sgdicp

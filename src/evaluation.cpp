@@ -1,0 +1,120 @@
+#include "sgdicp/evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+namespace sgdicp {
+namespace {
+
+// Unit normal of the reference at point `index`: from the cloud when it has normals, else the
+// smallest principal axis of its k nearest neighbours (zero when they do not span a plane).
+Eigen::Vector3d reference_normal(const ReferenceIndex& reference, std::uint32_t index,
+                                 std::size_t k, std::vector<Neighbor>& scratch) {
+  const PointCloud& cloud = reference.cloud();
+  if (cloud.has_normals()) return cloud.normals[index].cast<double>();
+  reference.k_nearest(cloud.points[index], k, scratch);
+  if (scratch.size() < 3) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& n : scratch) mean += cloud.points[n.index].cast<double>();
+  mean /= static_cast<double>(scratch.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& n : scratch) {
+    const Eigen::Vector3d d = cloud.points[n.index].cast<double>() - mean;
+    cov.noalias() += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  // Collinear or coincident neighbours define no plane.
+  if (eig.eigenvalues()[1] <= 1e-12 * eig.eigenvalues()[2]) return Eigen::Vector3d::Zero();
+  return eig.eigenvectors().col(0);
+}
+
+}  // namespace
+
+void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
+                        double max_distance_m, const EvaluationSettings& settings,
+                        RegistrationResult& result) {
+  const std::size_t n = source.size();
+  const std::size_t stride = settings.evaluation_points == 0
+                                 ? 1
+                                 : std::max<std::size_t>(1, n / settings.evaluation_points);
+  const Eigen::Matrix3f r = result.T_reference_source.topLeftCorner<3, 3>().cast<float>();
+  const Eigen::Vector3f t = result.T_reference_source.topRightCorner<3, 1>().cast<float>();
+  const auto max_sq = static_cast<float>(max_distance_m * max_distance_m);
+
+  struct Pair {
+    Eigen::Vector3d moved;
+    std::uint32_t reference_index;
+  };
+  std::vector<Pair> pairs;
+  double sum_sq = 0.0;
+  result.evaluated_points = 0;
+  for (std::size_t i = 0; i < n; i += stride) {
+    ++result.evaluated_points;
+    const Eigen::Vector3f moved = r * source.points[i] + t;
+    if (const auto nn = reference.nearest(moved, max_sq)) {
+      sum_sq += nn->squared_distance;
+      if (settings.check_degeneracy) pairs.push_back({moved.cast<double>(), nn->index});
+      ++result.inliers;
+    }
+  }
+  result.inlier_ratio =
+      result.evaluated_points > 0
+          ? static_cast<double>(result.inliers) / static_cast<double>(result.evaluated_points)
+          : 0.0;
+  result.inlier_rmse_m =
+      result.inliers > 0 ? std::sqrt(sum_sq / static_cast<double>(result.inliers)) : 0.0;
+
+  if (!settings.check_degeneracy) return;
+  if (pairs.size() < 6) {
+    result.degenerate = true;
+    result.constraint_ratio = 0.0;
+    result.message += "; degenerate: fewer than 6 pairs in the final alignment";
+    return;
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : pairs) centroid += p.moved;
+  centroid /= static_cast<double>(pairs.size());
+  // Lever arms in units of the pairs' RMS spread, so that a rotation moves the points about as
+  // much as a unit translation and the eigenvalues of both kinds compare.
+  double spread_sq = 0.0;
+  for (const auto& p : pairs) spread_sq += (p.moved - centroid).squaredNorm();
+  const double spread = std::sqrt(spread_sq / static_cast<double>(pairs.size()));
+  if (!(spread > 0.0)) {
+    result.degenerate = true;
+    result.constraint_ratio = 0.0;
+    result.message += "; degenerate: all pairs at one point";
+    return;
+  }
+  Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+  std::vector<Neighbor> scratch;
+  // A thousand pairs pin the eigenvalues down well; more only cost k-nearest queries.
+  const std::size_t pair_stride =
+      std::max<std::size_t>(1, pairs.size() / settings.degeneracy_pairs);
+  for (std::size_t i = 0; i < pairs.size(); i += pair_stride) {
+    const auto& p = pairs[i];
+    const Eigen::Vector3d normal =
+        reference_normal(reference, p.reference_index, settings.normal_neighbors, scratch);
+    const Eigen::Vector3d q = (p.moved - centroid) / spread;
+    Eigen::Matrix<double, 6, 1> j;
+    j << normal, q.cross(normal);
+    h.noalias() += j * j.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(h, Eigen::EigenvaluesOnly);
+  const double largest = eig.eigenvalues()[5];
+  result.constraint_ratio = largest > 0.0 ? std::max(0.0, eig.eigenvalues()[0]) / largest : 0.0;
+  result.degenerate = result.constraint_ratio < settings.degenerate_below;
+  if (result.degenerate) {
+    char note[160];
+    std::snprintf(note, sizeof(note),
+                  "; degenerate geometry (constraint ratio %.2g < %.2g): some motion is not "
+                  "constrained by the data",
+                  result.constraint_ratio, settings.degenerate_below);
+    result.message += note;
+  }
+}
+
+}  // namespace sgdicp

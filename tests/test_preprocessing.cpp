@@ -1,0 +1,562 @@
+// Tests of preprocessing.hpp: normals and covariances against brute force and known surfaces,
+// thread-count independence, degenerate neighbourhoods, voxel and random downsampling.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
+
+#include "sgdicp/error.hpp"
+#include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/preprocessing.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using sgdicp::InvalidInputError;
+using sgdicp::InvalidSettingsError;
+using sgdicp::NeighborhoodSettings;
+using sgdicp::PointCloud;
+using sgdicp::test::uniform;
+
+Eigen::Vector3d random_unit(std::mt19937_64& rng) {
+  Eigen::Vector3d v;
+  do {
+    v = {uniform(rng, -1, 1), uniform(rng, -1, 1), uniform(rng, -1, 1)};
+  } while (v.norm() < 0.1 || v.norm() > 1.0);
+  return v.normalized();
+}
+
+PointCloud random_box(std::mt19937_64& rng, std::size_t n, const Eigen::Vector3d& lo,
+                      const Eigen::Vector3d& hi) {
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    c.points.emplace_back(static_cast<float>(uniform(rng, lo.x(), hi.x())),
+                          static_cast<float>(uniform(rng, lo.y(), hi.y())),
+                          static_cast<float>(uniform(rng, lo.z(), hi.z())));
+  }
+  return c;
+}
+
+// A 2 m x 2 m patch of the plane through `centre` with unit normal `normal`, with Gaussian-like
+// noise (sum of uniforms) of about sigma along the normal.
+PointCloud noisy_plane(std::mt19937_64& rng, std::size_t n, const Eigen::Vector3d& centre,
+                       const Eigen::Vector3d& normal, double sigma) {
+  const Eigen::Vector3d u = normal.unitOrthogonal();
+  const Eigen::Vector3d v = normal.cross(u);
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    double noise = 0.0;
+    for (int j = 0; j < 12; ++j) noise += uniform(rng, -0.5, 0.5);
+    const Eigen::Vector3d p =
+        centre + uniform(rng, -1, 1) * u + uniform(rng, -1, 1) * v + sigma * noise * normal;
+    c.points.push_back(p.cast<float>());
+  }
+  return c;
+}
+
+NeighborhoodSettings raw_settings(std::size_t k) {
+  NeighborhoodSettings s;
+  s.k = k;
+  s.regularize = false;
+  return s;
+}
+
+// ---------------------------------------------------------------- normals
+
+TEST(Normals, NoisyPlaneGivesItsNormalFacingTheViewpoint) {
+  std::mt19937_64 rng(11);
+  const Eigen::Vector3d normal = random_unit(rng);
+  const Eigen::Vector3d centre(4.0, -3.0, 1.5);
+  PointCloud cloud = noisy_plane(rng, 3000, centre, normal, 0.002);
+
+  for (const double side : {1.0, -1.0}) {
+    NeighborhoodSettings s;
+    s.viewpoint = (centre + side * 10.0 * normal).cast<float>();
+    sgdicp::estimate_normals(cloud, s);
+    ASSERT_EQ(cloud.normals.size(), cloud.size());
+    EXPECT_TRUE(cloud.covariances.empty());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      const Eigen::Vector3d n = cloud.normals[i].cast<double>();
+      ASSERT_NEAR(n.norm(), 1.0, 1e-6) << i;
+      EXPECT_GT(std::abs(n.dot(normal)), 0.99) << i;
+      EXPECT_GE(n.dot(s.viewpoint.cast<double>() - cloud.points[i].cast<double>()), 0.0) << i;
+      EXPECT_GT(side * n.dot(normal), 0.0) << i;  // faces the side the viewpoint is on
+    }
+  }
+}
+
+TEST(Normals, SphereNormalsAreRadial) {
+  std::mt19937_64 rng(12);
+  const Eigen::Vector3d centre(3.0, -2.0, 1.0);
+  const double radius = 1.5;
+  PointCloud cloud;
+  for (int i = 0; i < 4000; ++i) {
+    cloud.points.push_back((centre + radius * random_unit(rng)).cast<float>());
+  }
+  NeighborhoodSettings s;
+  s.viewpoint = centre.cast<float>();  // inside: normals point inwards
+  sgdicp::estimate_covariances(cloud, s);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d radial = (cloud.points[i].cast<double>() - centre).normalized();
+    EXPECT_LT(cloud.normals[i].cast<double>().dot(radial), -0.99) << i;
+  }
+}
+
+// ---------------------------------------------------------------- covariances
+
+// The squared distance evaluated exactly as the kd-tree does (float, x then y then z).
+float squared_distance(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+  float sum = 0.0F;
+  for (int k = 0; k < 3; ++k) {
+    const float d = a[k] - b[k];
+    sum += d * d;
+  }
+  return sum;
+}
+
+// Brute-force k nearest neighbours; nullopt-like false when the k-th and (k+1)-th distances tie
+// (then the neighbourhood is not unique and the point is skipped).
+bool brute_neighbors(const PointCloud& cloud, std::size_t i, std::size_t k,
+                     std::vector<std::size_t>& out) {
+  std::vector<std::pair<float, std::size_t>> all;
+  for (std::size_t j = 0; j < cloud.size(); ++j) {
+    all.emplace_back(squared_distance(cloud.points[i], cloud.points[j]), j);
+  }
+  std::sort(all.begin(), all.end());
+  if (all.size() > k && all[k - 1].first == all[k].first) return false;
+  out.clear();
+  for (std::size_t j = 0; j < std::min(k, all.size()); ++j) out.push_back(all[j].second);
+  return true;
+}
+
+Eigen::Matrix3d brute_covariance(const PointCloud& cloud, const std::vector<std::size_t>& idx) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto j : idx) mean += cloud.points[j].cast<double>();
+  mean /= static_cast<double>(idx.size());
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+  for (const auto j : idx) {
+    const Eigen::Vector3d d = cloud.points[j].cast<double>() - mean;
+    c += d * d.transpose();
+  }
+  return c / static_cast<double>(idx.size());
+}
+
+TEST(Covariances, RawEqualBruteForceOverBruteForceNeighbours) {
+  std::mt19937_64 rng(13);
+  // Anisotropic box away from the origin, so that a one-pass or wrong-neighbour computation
+  // shows.
+  PointCloud cloud = random_box(rng, 600, {10, -3, 5}, {12, -2.5, 5.8});
+  for (const std::size_t k : {3UL, 10UL, 37UL}) {
+    sgdicp::estimate_covariances(cloud, raw_settings(k));
+    ASSERT_EQ(cloud.covariances.size(), cloud.size());
+    std::size_t compared = 0;
+    std::vector<std::size_t> idx;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (!brute_neighbors(cloud, i, k, idx)) continue;
+      ++compared;
+      const Eigen::Matrix3d expected = brute_covariance(cloud, idx);
+      const Eigen::Matrix3d got = cloud.covariances[i].cast<double>();
+      ASSERT_LT((got - expected).cwiseAbs().maxCoeff(), 1e-5) << "k " << k << " point " << i;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(expected);
+      EXPECT_GT(std::abs(es.eigenvectors().col(0).dot(cloud.normals[i].cast<double>())), 1.0 - 1e-4)
+          << "k " << k << " point " << i;
+    }
+    EXPECT_GT(compared, cloud.size() - 5);
+  }
+}
+
+TEST(Covariances, RegularizedArePlaneModelWithRawEigenvectors) {
+  std::mt19937_64 rng(14);
+  PointCloud raw = noisy_plane(rng, 1500, {1, 2, 3}, random_unit(rng), 0.01);
+  PointCloud box = random_box(rng, 500, {-1, -1, -1}, {1, 1, 1});
+  raw.points.insert(raw.points.end(), box.points.begin(), box.points.end());
+  sgdicp::estimate_covariances(raw, raw_settings(15));
+  for (const double eps : {1e-3, 0.05}) {
+    PointCloud reg = raw;
+    NeighborhoodSettings s = raw_settings(15);
+    s.regularize = true;
+    s.epsilon = eps;
+    sgdicp::estimate_covariances(reg, s);
+    ASSERT_EQ(reg.covariances.size(), raw.size());
+    EXPECT_EQ(reg.normals, raw.normals);  // regularization does not change the normals
+    const Eigen::Vector3d expected_values(eps, 1.0, 1.0);
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+      const Eigen::Matrix3d c = reg.covariances[i].cast<double>();
+      ASSERT_LT((c - c.transpose()).cwiseAbs().maxCoeff(), 1e-12) << i;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> reg_es(c);
+      ASSERT_LT((reg_es.eigenvalues() - expected_values).cwiseAbs().maxCoeff(), 1e-5) << i;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> raw_es(
+          raw.covariances[i].cast<double>());
+      for (int j = 0; j < 3; ++j) {
+        const Eigen::Vector3d v = raw_es.eigenvectors().col(j);
+        EXPECT_LT((c * v - expected_values[j] * v).norm(), 1e-5) << i << " eigenvector " << j;
+      }
+    }
+  }
+}
+
+TEST(Covariances, IdenticalForAnyThreadCount) {
+  std::mt19937_64 rng(15);
+  PointCloud base = noisy_plane(rng, 12000, {0, 0, -1.7}, {0.1, 0.2, 0.97}, 0.03);
+  const PointCloud box = random_box(rng, 8000, {-20, -20, -2}, {20, 20, 3});
+  base.points.insert(base.points.end(), box.points.begin(), box.points.end());
+  for (const bool regularize : {false, true}) {
+    std::vector<PointCloud> results;
+    for (const std::size_t threads : {1UL, 2UL, 4UL}) {
+      PointCloud c = base;
+      NeighborhoodSettings s;
+      s.num_threads = threads;
+      s.regularize = regularize;
+      s.viewpoint = {0, 0, 2};
+      sgdicp::estimate_covariances(c, s);
+      results.push_back(std::move(c));
+    }
+    for (std::size_t r = 1; r < results.size(); ++r) {
+      ASSERT_EQ(results[r].normals.size(), base.size());
+      for (std::size_t i = 0; i < base.size(); ++i) {
+        ASSERT_EQ(results[r].normals[i], results[0].normals[i]) << i;
+        ASSERT_EQ(results[r].covariances[i], results[0].covariances[i]) << i;
+      }
+    }
+  }
+}
+
+TEST(Covariances, PrebuiltIndexGivesTheSameResultAndMustMatchTheCloud) {
+  std::mt19937_64 rng(16);
+  PointCloud a = random_box(rng, 700, {0, 0, 0}, {1, 2, 0.3});
+  PointCloud b = a;
+  sgdicp::estimate_covariances(a);
+  const sgdicp::ReferenceIndex index(b);
+  sgdicp::estimate_covariances(b, index);
+  EXPECT_EQ(a.normals, b.normals);
+  EXPECT_EQ(a.covariances, b.covariances);
+  PointCloud c = b;
+  c.normals.clear();
+  sgdicp::estimate_normals(c, index);
+  EXPECT_EQ(c.normals, a.normals);
+
+  PointCloud smaller = a;
+  smaller.points.pop_back();
+  EXPECT_THROW(sgdicp::estimate_covariances(smaller, index), InvalidInputError);
+  PointCloud moved = a;
+  moved.points[350].x() += 0.01F;
+  EXPECT_THROW(sgdicp::estimate_covariances(moved, index), InvalidInputError);
+  EXPECT_THROW(sgdicp::estimate_normals(moved, index), InvalidInputError);
+}
+
+TEST(Normals, EstimateNormalsLeavesCovariancesAlone) {
+  std::mt19937_64 rng(17);
+  PointCloud cloud = random_box(rng, 300, {0, 0, 0}, {1, 1, 0.1});
+  PointCloud full = cloud;
+  sgdicp::estimate_covariances(full);
+  sgdicp::estimate_normals(cloud);
+  EXPECT_EQ(cloud.normals, full.normals);
+  EXPECT_TRUE(cloud.covariances.empty());
+  // Existing covariances are kept as they were.
+  cloud.covariances.assign(cloud.size(), Eigen::Matrix3f::Constant(7.0F));
+  sgdicp::estimate_normals(cloud);
+  EXPECT_EQ(cloud.covariances[0], Eigen::Matrix3f::Constant(7.0F));
+}
+
+void expect_finite(const PointCloud& c) {
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    ASSERT_TRUE(c.normals[i].allFinite()) << i;
+    ASSERT_TRUE(c.covariances[i].allFinite()) << i;
+  }
+}
+
+TEST(Degenerate, DuplicatesAndLinesGiveFiniteMarkedOutput) {
+  // Every point repeated 25 times: each 20-neighbourhood is one location repeated.
+  std::mt19937_64 rng(18);
+  const PointCloud plane = noisy_plane(rng, 40, {1, 2, 3}, {0, 0, 1}, 0.0);
+  PointCloud duplicates;
+  for (const auto& p : plane.points) duplicates.points.insert(duplicates.points.end(), 25, p);
+  // 60 collinear points far from the origin, rounded to float (so only nearly collinear).
+  PointCloud line;
+  for (int i = 0; i < 60; ++i) {
+    const double t = 0.1 * i;
+    line.points.emplace_back(static_cast<float>(1000.0 + t), static_cast<float>(2000.0 + 2 * t),
+                             static_cast<float>(3000.0 - t));
+  }
+  PointCloud one;
+  one.points.emplace_back(1, 2, 3);
+  PointCloud two = one;
+  two.points.emplace_back(1, 2, 4);
+  PointCloud same_three;
+  same_three.points.assign(3, Eigen::Vector3f(0, 0, 0));
+
+  for (const PointCloud* input : {&duplicates, &line, &one, &two, &same_three}) {
+    for (const bool regularize : {false, true}) {
+      PointCloud c = *input;
+      NeighborhoodSettings s;
+      s.regularize = regularize;
+      sgdicp::estimate_covariances(c, s);
+      ASSERT_EQ(c.normals.size(), c.size());
+      expect_finite(c);
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        EXPECT_TRUE(c.normals[i].isZero()) << i << ": " << c.normals[i].transpose();
+        if (regularize) {
+          EXPECT_EQ(c.covariances[i], Eigen::Matrix3f::Identity()) << i;
+        }
+      }
+    }
+  }
+  // Raw covariances of a duplicate cluster are exactly zero; of a line, rank one.
+  PointCloud c = duplicates;
+  sgdicp::estimate_covariances(c, raw_settings(20));
+  EXPECT_EQ(c.covariances[0], Eigen::Matrix3f::Zero());
+}
+
+TEST(Degenerate, PlaneWithSomeDuplicatesStillHasNormals) {
+  std::mt19937_64 rng(19);
+  PointCloud cloud = noisy_plane(rng, 2000, {0, 0, 0}, {0, 0, 1}, 0.0);
+  for (std::size_t i = 0; i < 200; ++i) cloud.points.push_back(cloud.points[i]);
+  NeighborhoodSettings s;
+  s.viewpoint = {0, 0, 5};
+  sgdicp::estimate_covariances(cloud, s);
+  expect_finite(cloud);
+  for (const auto& n : cloud.normals) EXPECT_GT(n.z(), 0.99F);
+}
+
+TEST(Settings, BadSettingsAndInputThrowAndLeaveTheCloudUnchanged) {
+  std::mt19937_64 rng(20);
+  const PointCloud cloud = random_box(rng, 50, {0, 0, 0}, {1, 1, 1});
+  const auto expect_settings_error = [&](const NeighborhoodSettings& s) {
+    PointCloud c = cloud;
+    EXPECT_THROW(sgdicp::estimate_covariances(c, s), InvalidSettingsError);
+    EXPECT_THROW(sgdicp::estimate_normals(c, s), InvalidSettingsError);
+    EXPECT_TRUE(c.normals.empty());
+    EXPECT_TRUE(c.covariances.empty());
+  };
+  NeighborhoodSettings s;
+  s.k = 2;
+  expect_settings_error(s);
+  s.k = 1001;
+  expect_settings_error(s);
+  s = {};
+  for (const double eps : {0.0, -1e-3, 1.5, std::nan(""), HUGE_VAL}) {
+    s.epsilon = eps;
+    expect_settings_error(s);
+  }
+  s = {};
+  s.num_threads = 1025;
+  expect_settings_error(s);
+  s = {};
+  s.viewpoint.x() = std::nanf("");
+  expect_settings_error(s);
+  // Edges of the valid ranges are accepted.
+  for (const std::size_t k : {3UL, 1000UL}) {
+    PointCloud c = cloud;
+    s = {};
+    s.k = k;
+    s.num_threads = 1024;
+    s.epsilon = 1.0;
+    EXPECT_NO_THROW(sgdicp::estimate_covariances(c, s));
+  }
+
+  PointCloud empty;
+  EXPECT_THROW(sgdicp::estimate_covariances(empty), InvalidInputError);
+  EXPECT_THROW(sgdicp::estimate_normals(empty), InvalidInputError);
+  PointCloud bad = cloud;
+  bad.points[7].y() = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(sgdicp::estimate_covariances(bad), InvalidInputError);
+  bad.points[7].y() = std::nanf("");
+  EXPECT_THROW(sgdicp::estimate_normals(bad), InvalidInputError);
+  EXPECT_TRUE(bad.normals.empty());
+}
+
+// ---------------------------------------------------------------- voxel grid
+
+using Key = std::array<std::int64_t, 3>;
+
+Key key_of(const Eigen::Vector3f& p, double voxel) {
+  return {static_cast<std::int64_t>(std::floor(static_cast<double>(p.x()) / voxel)),
+          static_cast<std::int64_t>(std::floor(static_cast<double>(p.y()) / voxel)),
+          static_cast<std::int64_t>(std::floor(static_cast<double>(p.z()) / voxel))};
+}
+
+TEST(VoxelDownsample, CentroidsOfOccupiedVoxelsInFirstOccurrenceOrder) {
+  std::mt19937_64 rng(21);
+  PointCloud cloud = random_box(rng, 6000, {-5, -3, -2}, {4, 3, 1});
+  cloud.normals.assign(cloud.size(), Eigen::Vector3f::UnitZ());
+  for (const double voxel : {0.25, 0.7, 3.0}) {
+    std::set<Key> occupied;
+    std::vector<Key> first_order;
+    std::map<Key, std::pair<Eigen::Vector3d, int>> sums;
+    for (const auto& p : cloud.points) {
+      const Key k = key_of(p, voxel);
+      if (occupied.insert(k).second) first_order.push_back(k);
+      auto& [sum, count] = sums.try_emplace(k, Eigen::Vector3d::Zero(), 0).first->second;
+      sum += p.cast<double>();
+      ++count;
+    }
+    const PointCloud out = sgdicp::voxel_downsample(cloud, voxel);
+    ASSERT_EQ(out.size(), occupied.size()) << voxel;
+    EXPECT_TRUE(out.normals.empty());
+    EXPECT_TRUE(out.covariances.empty());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      // The output point lies in the voxel of the points it averages, in first-occurrence order.
+      ASSERT_EQ(key_of(out.points[i], voxel), first_order[i]) << voxel << " " << i;
+      const auto& [sum, count] = sums.at(first_order[i]);
+      EXPECT_LT((out.points[i].cast<double>() - sum / count).norm(), 1e-5) << i;
+    }
+    const PointCloud again = sgdicp::voxel_downsample(cloud, voxel);
+    EXPECT_EQ(again.points, out.points);
+  }
+}
+
+TEST(VoxelDownsample, NegativeCoordinatesUseFloor) {
+  PointCloud cloud;
+  // -0.1 and 0.1 straddle 0: truncation towards zero would merge them into one voxel.
+  cloud.points = {{-0.1F, 0.5F, 0.5F},  {0.1F, 0.5F, 0.5F},   {-0.3F, 0.5F, 0.5F},
+                  {-1.0F, -1.5F, 0.5F}, {-1.2F, -1.5F, 0.5F}, {-0.9F, -1.5F, 0.5F}};
+  const PointCloud out = sgdicp::voxel_downsample(cloud, 1.0);
+  ASSERT_EQ(out.size(), 4U);
+  EXPECT_TRUE(out.points[0].isApprox(Eigen::Vector3f(-0.2F, 0.5F, 0.5F)));
+  EXPECT_TRUE(out.points[1].isApprox(Eigen::Vector3f(0.1F, 0.5F, 0.5F)));
+  // -1.0 lies on the lower face of voxel x = -1 (with -0.9); -1.2 is alone in x = -2.
+  EXPECT_TRUE(out.points[2].isApprox(Eigen::Vector3f(-0.95F, -1.5F, 0.5F)));
+  EXPECT_TRUE(out.points[3].isApprox(Eigen::Vector3f(-1.2F, -1.5F, 0.5F)));
+}
+
+TEST(VoxelDownsample, CentroidOfPointsOnAVoxelFaceStaysInside) {
+  // Many points at the lower face of a voxel and one inside: the float centroid must not round
+  // into the neighbouring voxel.
+  PointCloud cloud;
+  for (int i = 0; i < 1000; ++i) cloud.points.emplace_back(0.3F, 0.6F, 0.9F);
+  cloud.points.emplace_back(0.3999F, 0.6F, 0.9F);
+  for (const double voxel : {0.1, 0.3, 0.05}) {
+    const PointCloud out = sgdicp::voxel_downsample(cloud, voxel);
+    std::set<Key> occupied;
+    for (const auto& p : cloud.points) occupied.insert(key_of(p, voxel));
+    ASSERT_EQ(out.size(), occupied.size());
+    for (const auto& p : out.points) EXPECT_TRUE(occupied.count(key_of(p, voxel)) == 1) << voxel;
+  }
+}
+
+TEST(VoxelDownsample, BadSizesAndOverflowThrow) {
+  PointCloud cloud;
+  cloud.points = {{1000.0F, 0.0F, -1000.0F}, {1.0F, 2.0F, 3.0F}};
+  for (const double voxel : {0.0, -0.5, std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+    EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, voxel), InvalidSettingsError) << voxel;
+  }
+  EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, 1e-300), InvalidSettingsError);
+  EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, 1e-16), InvalidSettingsError);
+  EXPECT_EQ(sgdicp::voxel_downsample(cloud, 1e-12).size(), 2U);  // 1e15 fits
+  EXPECT_EQ(sgdicp::voxel_downsample(cloud, 1e300).size(), 2U);  // voxels 0 and -1
+  EXPECT_EQ(sgdicp::voxel_downsample(PointCloud{}, 0.1).size(), 0U);
+  cloud.points[1].z() = std::nanf("");
+  EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, 0.1), InvalidInputError);
+}
+
+// ---------------------------------------------------------------- random subsets
+
+// A cloud whose point i is (i, 0, 0), with normals and covariances that encode i too.
+PointCloud indexed_cloud(std::size_t n) {
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto f = static_cast<float>(i);
+    c.points.emplace_back(f, 0.0F, 0.0F);
+    c.normals.emplace_back(0.0F, f, 0.0F);
+    c.covariances.push_back(Eigen::Matrix3f::Constant(f));
+  }
+  return c;
+}
+
+std::vector<std::size_t> indices_of(const PointCloud& c) {
+  std::vector<std::size_t> idx;
+  for (const auto& p : c.points) idx.push_back(static_cast<std::size_t>(p.x()));
+  return idx;
+}
+
+TEST(RandomDownsample, DistinctOrderedSubsetCarryingAttributes) {
+  const PointCloud cloud = indexed_cloud(1000);
+  const PointCloud out = sgdicp::random_downsample(cloud, 137, 42);
+  ASSERT_EQ(out.size(), 137U);
+  ASSERT_EQ(out.normals.size(), 137U);
+  ASSERT_EQ(out.covariances.size(), 137U);
+  const auto idx = indices_of(out);
+  // Strictly increasing: input order and distinct.
+  EXPECT_EQ(std::adjacent_find(idx.begin(), idx.end(), std::greater_equal<>()), idx.end());
+  for (std::size_t j = 0; j < out.size(); ++j) {
+    ASSERT_LT(idx[j], cloud.size());
+    EXPECT_EQ(out.points[j], cloud.points[idx[j]]);
+    EXPECT_EQ(out.normals[j], cloud.normals[idx[j]]);
+    EXPECT_EQ(out.covariances[j], cloud.covariances[idx[j]]);
+  }
+  EXPECT_EQ(sgdicp::random_downsample(cloud, 137, 42).points, out.points);
+  EXPECT_NE(sgdicp::random_downsample(cloud, 137, 43).points, out.points);
+
+  PointCloud points_only = cloud;
+  points_only.normals.clear();
+  points_only.covariances.clear();
+  const PointCloud bare = sgdicp::random_downsample(points_only, 137, 42);
+  EXPECT_EQ(bare.points, out.points);
+  EXPECT_TRUE(bare.normals.empty() && bare.covariances.empty());
+}
+
+TEST(RandomDownsample, EdgeCountsAndRatio) {
+  const PointCloud cloud = indexed_cloud(200);
+  for (const std::size_t count : {200UL, 201UL, 100000UL}) {
+    const PointCloud all = sgdicp::random_downsample(cloud, count, 1);
+    EXPECT_EQ(all.points, cloud.points);
+    EXPECT_EQ(all.normals, cloud.normals);
+  }
+  EXPECT_EQ(sgdicp::random_downsample(cloud, 0, 1).size(), 0U);
+  EXPECT_EQ(sgdicp::random_downsample(cloud, 1, 1).size(), 1U);
+  EXPECT_EQ(sgdicp::random_downsample(cloud, 199, 1).size(), 199U);
+  EXPECT_EQ(sgdicp::random_downsample(PointCloud{}, 5, 1).size(), 0U);
+
+  EXPECT_EQ(sgdicp::random_downsample_ratio(cloud, 0.25, 3).size(), 50U);
+  EXPECT_EQ(sgdicp::random_downsample_ratio(cloud, 0.25, 3).points,
+            sgdicp::random_downsample(cloud, 50, 3).points);
+  EXPECT_EQ(sgdicp::random_downsample_ratio(cloud, 1.0, 3).points, cloud.points);
+  EXPECT_EQ(sgdicp::random_downsample_ratio(cloud, 1e-9, 3).size(), 1U);
+  for (const double ratio : {0.0, -0.1, 1.0001, std::nan(""), HUGE_VAL}) {
+    EXPECT_THROW((void)sgdicp::random_downsample_ratio(cloud, ratio, 3), InvalidSettingsError)
+        << ratio;
+  }
+  PointCloud bad = cloud;
+  bad.normals.pop_back();
+  EXPECT_THROW((void)sgdicp::random_downsample(bad, 10, 1), InvalidInputError);
+  bad = cloud;
+  bad.covariances.resize(3);
+  EXPECT_THROW((void)sgdicp::random_downsample(bad, 10, 1), InvalidInputError);
+}
+
+TEST(RandomDownsample, EveryPointAndPairIsEquallyLikely) {
+  // 3 of 8 points over many seeds: each point is chosen with probability 3/8, each pair with
+  // 3/28. Bounds are 5 binomial standard deviations.
+  const PointCloud cloud = indexed_cloud(8);
+  const int trials = 40000;
+  std::array<int, 8> singles{};
+  std::map<std::pair<std::size_t, std::size_t>, int> pairs;
+  for (int t = 0; t < trials; ++t) {
+    const auto idx = indices_of(sgdicp::random_downsample(cloud, 3, 1000 + t));
+    ASSERT_EQ(idx.size(), 3U);
+    for (std::size_t a = 0; a < 3; ++a) {
+      ++singles[idx[a]];
+      for (std::size_t b = a + 1; b < 3; ++b) ++pairs[{idx[a], idx[b]}];
+    }
+  }
+  const auto within = [&](int observed, double p) {
+    const double mean = trials * p;
+    return std::abs(observed - mean) < 5.0 * std::sqrt(mean * (1.0 - p));
+  };
+  for (std::size_t i = 0; i < 8; ++i) EXPECT_TRUE(within(singles[i], 3.0 / 8.0)) << i;
+  EXPECT_EQ(pairs.size(), 28U);
+  for (const auto& [pair, n] : pairs) {
+    EXPECT_TRUE(within(n, 3.0 / 28.0)) << pair.first << "," << pair.second << ": " << n;
+  }
+}
+
+}  // namespace
