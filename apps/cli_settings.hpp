@@ -192,17 +192,19 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
       "Convergence: a stationary window's net displacement over its path length must "
       "be at most this (1 = straight travel, ~0.2 = jitter), unitless" +
           both(num(d.convergence.max_path_efficiency), num(p.convergence.max_path_efficiency)));
-  app.add_option(
-      "--translation-tolerance", o.translation_tolerance,
-      "Convergence: a window whose steps each move the translation less than this "
-      "also ends a stage (batch methods: an iteration that moves it less converges), "
-      "scaled units" +
-          both(num(d.convergence.translation_tolerance), num(p.convergence.translation_tolerance)));
-  app.add_option(
-      "--rotation-tolerance", o.rotation_tolerance,
-      "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
-      "|d yaw|), rad" +
-          both(num(d.convergence.rotation_tolerance), num(p.convergence.rotation_tolerance)));
+  app.add_option("--translation-tolerance", o.translation_tolerance,
+                 "Convergence: a window whose steps each move the translation less than this "
+                 "also ends a stage (batch methods: an iteration that moves it less converges), "
+                 "scaled units" +
+                     both(num(d.convergence.translation_tolerance) + " for SGD methods, " +
+                              num(BatchSettings{}.translation_tolerance) + " for batch methods",
+                          num(p.convergence.translation_tolerance)));
+  app.add_option("--rotation-tolerance", o.rotation_tolerance,
+                 "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
+                 "|d yaw|; batch methods: rotation angle), rad" +
+                     both(num(d.convergence.rotation_tolerance) + " for SGD methods, " +
+                              num(BatchSettings{}.rotation_tolerance) + " for batch methods",
+                          num(p.convergence.rotation_tolerance)));
   app.add_option(
       "--refine-stages", o.refine_stages,
       "Refinement stages after the first stationary stage (0 = the paper's single phase)" +

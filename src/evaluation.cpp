@@ -10,6 +10,15 @@
 namespace sgdicp {
 namespace {
 
+// The k-th of `count` sample indices in [0, n): the golden-ratio (Kronecker) sequence spreads
+// them evenly without the aliasing a fixed stride has on data in a periodic order (scan rings,
+// interleaved surfaces).
+std::size_t sample_index(std::size_t k, std::size_t count, std::size_t n) {
+  if (count >= n) return k;
+  const double phase = std::fmod(static_cast<double>(k) * 0.6180339887498949, 1.0);
+  return std::min(n - 1, static_cast<std::size_t>(phase * static_cast<double>(n)));
+}
+
 // Unit normal of the reference at point `index`: from the cloud when it has normals, else the
 // smallest principal axis of its k nearest neighbours (zero when they do not span a plane).
 Eigen::Vector3d reference_normal(const ReferenceIndex& reference, std::uint32_t index,
@@ -38,9 +47,8 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                         double max_distance_m, const EvaluationSettings& settings,
                         RegistrationResult& result) {
   const std::size_t n = source.size();
-  const std::size_t stride = settings.evaluation_points == 0
-                                 ? 1
-                                 : std::max<std::size_t>(1, n / settings.evaluation_points);
+  const std::size_t samples =
+      settings.evaluation_points == 0 ? n : std::min(n, settings.evaluation_points);
   const Eigen::Matrix3f r = result.T_reference_source.topLeftCorner<3, 3>().cast<float>();
   const Eigen::Vector3f t = result.T_reference_source.topRightCorner<3, 1>().cast<float>();
   const auto max_sq = static_cast<float>(max_distance_m * max_distance_m);
@@ -52,7 +60,8 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
   std::vector<Pair> pairs;
   double sum_sq = 0.0;
   result.evaluated_points = 0;
-  for (std::size_t i = 0; i < n; i += stride) {
+  for (std::size_t k = 0; k < samples; ++k) {
+    const std::size_t i = sample_index(k, samples, n);
     ++result.evaluated_points;
     const Eigen::Vector3f moved = r * source.points[i] + t;
     if (const auto nn = reference.nearest(moved, max_sq)) {
@@ -92,10 +101,9 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
   std::vector<Neighbor> scratch;
   // A thousand pairs pin the eigenvalues down well; more only cost k-nearest queries.
-  const std::size_t pair_stride =
-      std::max<std::size_t>(1, pairs.size() / settings.degeneracy_pairs);
-  for (std::size_t i = 0; i < pairs.size(); i += pair_stride) {
-    const auto& p = pairs[i];
+  const std::size_t used = std::min(pairs.size(), settings.degeneracy_pairs);
+  for (std::size_t k = 0; k < used; ++k) {
+    const auto& p = pairs[sample_index(k, used, pairs.size())];
     const Eigen::Vector3d normal =
         reference_normal(reference, p.reference_index, settings.normal_neighbors, scratch);
     const Eigen::Vector3d q = (p.moved - centroid) / spread;

@@ -13,62 +13,15 @@
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/pairs.hpp"
 #include "sgdicp/registration.hpp"
+#include "test_support.hpp"
 
 namespace sgdicp {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-// A small man-made scene without symmetries: a floor, two walls, a box and a ball, 60k points
-// (about 4 cm apart) with 2 mm noise, in metres.
-PointCloud synthetic_scene(std::uint64_t seed, std::size_t n = 60000) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<float> u(0.0F, 1.0F);
-  std::normal_distribution<float> noise(0.0F, 0.002F);
-  PointCloud cloud;
-  cloud.points.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const float a = u(rng), b = u(rng);
-    Eigen::Vector3f p;
-    switch (i % 5) {
-      case 0:
-        p = {6.0F * a, 4.0F * b, 0.0F};
-        break;  // floor
-      case 1:
-        p = {6.0F * a, 0.0F, 2.5F * b};
-        break;  // wall along x
-      case 2:
-        p = {0.0F, 4.0F * a, 2.5F * b};
-        break;  // wall along y
-      case 3:
-        p = {2.0F + 0.8F * a, 1.5F + 0.5F * b, 0.9F};
-        break;    // box top
-      default: {  // ball
-        const float th = 2.0F * std::numbers::pi_v<float> * a, ph = std::acos(2.0F * b - 1.0F);
-        p = Eigen::Vector3f(4.2F, 2.8F, 0.6F) + 0.5F * Eigen::Vector3f(std::sin(ph) * std::cos(th),
-                                                                       std::sin(ph) * std::sin(th),
-                                                                       std::cos(ph));
-      }
-    }
-    cloud.points.push_back(p + Eigen::Vector3f(noise(rng), noise(rng), noise(rng)));
-  }
-  return cloud;
-}
-
-Eigen::Matrix4d make_transform(double roll, double pitch, double yaw, const Eigen::Vector3d& t) {
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = rotation_from_rpy(roll, pitch, yaw);
-  T.topRightCorner<3, 1>() = t;
-  return T;
-}
-
-PointCloud transformed(const PointCloud& cloud, const Eigen::Matrix4d& T) {
-  PointCloud out = cloud;
-  const Eigen::Matrix3f r = T.topLeftCorner<3, 3>().cast<float>();
-  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
-  for (auto& p : out.points) p = r * p + t;
-  return out;
-}
+using test::kDeg;
+using test::make_transform;
+using test::synthetic_scene;
+using test::transformed;
 
 std::filesystem::path shared(const std::string& relative) {
   return std::filesystem::path(SGDICP_SHARED_DATA) / relative;

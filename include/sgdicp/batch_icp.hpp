@@ -32,11 +32,12 @@ struct BatchSettings {
   Distance kernel_scale = Distance::scaled(0.01);
   /// Keep only this fraction of the pairs, the closest ones (trimmed ICP). In (0, 1].
   double trim_ratio = 1.0;
-  std::size_t max_iterations = 50;
-  /// Converged when an iteration moves the translation less than this (scaled units) ...
-  double translation_tolerance = 1e-6;
+  std::size_t max_iterations = 100;
+  /// Converged when an iteration moves the translation less than this (scaled units: 0.1 mm on
+  /// a 10 m room, 1.5 mm on a 150 m LiDAR scene) ...
+  double translation_tolerance = 1e-5;
   /// ... and the rotation less than this (rad).
-  double rotation_tolerance = 1e-6;
+  double rotation_tolerance = 1e-5;
   /// Initial Levenberg-Marquardt damping, relative to the mean diagonal of J^T J; 0 = plain
   /// Gauss-Newton. Unused by point-to-point (closed form).
   double initial_damping = 1e-6;
