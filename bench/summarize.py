@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Markdown table from `sgdicp bench --csv` files (standard library only).
 
-usage: bench/summarize.py LABEL=FILE.csv [LABEL=FILE.csv ...]
-One row per (pairs file, label): median translation and rotation errors, success rates,
-convergence, median time and points processed.
+usage: bench/summarize.py [LABEL=]FILE.csv [...]
+One row per (pairs file, method) found in the files (the method column of the CSV, prefixed by
+LABEL when given): median translation and rotation errors, success rates, convergence, median
+time and points processed.
 """
 import csv
 import os
@@ -23,12 +24,15 @@ def main(argv):
     print("| pairs | method | n | t err median [m] | r err median [deg] | r err median, sum abs d rpy [rad] "
           "| success 5 cm & 1 deg | success 2 m & 5 deg | converged | time median [ms] | points processed median (passes) |")
     print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    groups = {}
     for arg in argv[1:]:
-        label, path = arg.split("=", 1)
-        rows = rows_of(path)
-        if not rows:
-            continue
-        pairs = os.path.basename(rows[0]["pairs_file"]).removesuffix(".txt")
+        label, path = arg.split("=", 1) if "=" in arg else ("", arg)
+        for r in rows_of(path):
+            pairs = os.path.basename(r["pairs_file"]).removesuffix(".txt")
+            method = r.get("method", "")
+            name = " ".join(x for x in (label, method) if x) or "sgd"
+            groups.setdefault((pairs, name), []).append(r)
+    for (pairs, name), rows in groups.items():
         te = [float(r["translation_error_m"]) for r in rows]
         rg = [float(r["rotation_error_geodesic_deg"]) for r in rows]
         rs = [float(r["rotation_error_euler_rad"]) for r in rows]
@@ -39,7 +43,7 @@ def main(argv):
         ok2 = sum(1 for t, r in zip(te, rg) if t < 2.0 and r < 5.0)
         conv = sum(int(r["converged"]) for r in rows)
         n = len(rows)
-        print(f"| {pairs} | {label} | {n} | {statistics.median(te):.3g} | {statistics.median(rg):.3g} | "
+        print(f"| {pairs} | {name} | {n} | {statistics.median(te):.3g} | {statistics.median(rg):.3g} | "
               f"{statistics.median(rs):.3g} | {100 * ok1 / n:.0f} % | {100 * ok2 / n:.0f} % | {conv}/{n} | "
               f"{statistics.median(tm):.3g} | {statistics.median(pts):.3g} ({statistics.median(passes):.2g}) |")
     return 0
