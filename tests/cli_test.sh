@@ -433,5 +433,30 @@ else
   fail "bench on a relative-path pairs file (exit $rc): $(head -c 400 "$tmp/err")"
 fi
 
+# Methods, kernels and preprocessing from the command line.
+for method in sgd sgd-plane sgd-gicp icp icp-plane gicp; do
+  run register "$MOVED" "$REF" --method "$method" --json
+  if [ "$rc" -eq 0 ] && grep -q "\"method\": \"$method\"" "$tmp/out"; then
+    pass "register --method $method runs and reports its method"
+  else
+    fail "register --method $method (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+done
+expect_ok "register with a kernel, trimming and downsampling" register "$MOVED" "$REF" \
+  --kernel cauchy --trim 0.8 --voxel-size 0.02
+expect_ok "register with the Gauss-Newton preconditioner" register "$MOVED" "$REF" \
+  --preconditioner gauss-newton
+expect_error "an unknown method" 'method|sgd' register "$MOVED" "$REF" --method magic
+expect_error "an unknown method in a bench list" 'unknown method' \
+  bench "$tmp/pairs_dir/pairs.txt" --method sgd,magic
+expect_error "--trim 0" 'trim' register "$MOVED" "$REF" --trim 0
+expect_error "--voxel-size -1" 'voxel' register "$MOVED" "$REF" --voxel-size -1
+run bench "$tmp/pairs_dir/pairs.txt" --method sgd,icp,gicp --csv "$tmp/methods.csv"
+if [ "$rc" -eq 0 ] && grep -q '^method ' "$tmp/out" && [ "$(grep -c . "$tmp/methods.csv")" -eq 4 ]; then
+  pass "bench --method sgd,icp,gicp prints one comparison table and one CSV row per method"
+else
+  fail "bench --method sgd,icp,gicp (exit $rc): $(head -c 400 "$tmp/err")"
+fi
+
 echo "(${skipped} skipped)"
 finish
