@@ -4,7 +4,8 @@
 set -euo pipefail
 
 packages=(build-essential cmake pkg-config libeigen3-dev libnanoflann-dev libcli11-dev
-  nlohmann-json3-dev liblzf-dev libstb-dev libgtest-dev libbenchmark-dev python3)
+  nlohmann-json3-dev liblzf-dev libstb-dev libgtest-dev libbenchmark-dev python3
+  python3-dev python3-venv)
 
 missing=()
 for p in "${packages[@]}"; do

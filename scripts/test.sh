@@ -1,10 +1,49 @@
 #!/usr/bin/env bash
 # One command for a fresh Debian 12 machine: install dependencies, build with warnings as errors,
-# and run every test (unit, real-data and CLI tests through CTest). Real-data tests read
-# ../shared/data beside the repository and skip when it is absent.
+# run every C++ test (unit, real-data and CLI tests through CTest), then install the Python
+# package with pip and run its tests (pytest tests/python). Real-data tests read ../shared/data
+# beside the repository and skip when it is absent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 scripts/build.sh
 build_dir=${BUILD_DIR:-build}
 ctest --test-dir "$build_dir" --output-on-failure -j"$(nproc)"
+
+# Python: `pip install .` into the current Python (${PYTHON:-python3}), or into a venv in the
+# build folder when that Python has no pip or is Debian's own (externally managed, PEP 668).
+python=${PYTHON:-python3}
+needs_venv() {
+  "$python" -m pip --version >/dev/null 2>&1 || return 0
+  "$python" - <<'PY' || return 0
+import os, sys, sysconfig
+marker = os.path.join(sysconfig.get_path("stdlib"), "EXTERNALLY-MANAGED")
+sys.exit(1 if sys.prefix == sys.base_prefix and os.path.isfile(marker) else 0)
+PY
+  return 1
+}
+if needs_venv; then
+  echo "test: installing the Python package into the venv $build_dir/python-venv"
+  python3 -m venv "$build_dir/python-venv"
+  python="$build_dir/python-venv/bin/python"
+fi
+pip_install() {
+  "$python" -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "$@"
+}
+pip_install pytest numpy
+# Build requirements (scikit-build-core, pybind11) come from pyproject.toml; the module is built
+# in the build folder, with warnings as errors.
+pip_install --config-settings=build-dir="$build_dir/python" \
+  --config-settings=cmake.define.SGDICP_WARNINGS_AS_ERRORS=ON .
+
+case "$build_dir" in
+  /*) cli="$build_dir/sgdicp" ;;
+  *) cli="$PWD/$build_dir/sgdicp" ;;
+esac
+status=0
+SGDICP_BIN="$cli" "$python" -m pytest tests/python -q -p no:cacheprovider || status=$?
+if [ "$status" -eq 5 ]; then
+  echo "test: pytest collected no tests in tests/python" >&2
+  exit 1
+fi
+exit "$status"

@@ -1,0 +1,576 @@
+// The Python module sgd_icp._core: registration, reference indexes, results, file I/O, metrics
+// and the library's errors as Python exceptions. The public names are re-exported by
+// sgd_icp/__init__.py; sgd_icp/_core.pyi documents them for type checkers and IDEs.
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <pybind11/stl/filesystem.h>
+
+#include "bindings.hpp"
+#include "sgdicp/error.hpp"
+#include "sgdicp/features.hpp"
+#include "sgdicp/io.hpp"
+#include "sgdicp/metrics.hpp"
+#include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/registration.hpp"
+
+#ifndef SGDICP_VERSION
+#define SGDICP_VERSION "0.0.0"
+#endif
+
+namespace sgdicp::python {
+namespace {
+
+using namespace pybind11::literals;
+
+// ---- exceptions: sgd_icp.Error and its subclasses, which are also ValueError / OSError
+
+struct ExceptionTypes {
+  PyObject* error = nullptr;
+  PyObject* invalid_input = nullptr;
+  PyObject* invalid_settings = nullptr;
+  PyObject* format = nullptr;
+  PyObject* io = nullptr;
+};
+ExceptionTypes exception_types;  // created once at import; the module holds the references
+
+PyObject* new_exception(py::module_& m, const char* name, const char* doc, py::tuple bases) {
+  const std::string qualified = std::string("sgd_icp.") + name;
+  PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, bases.ptr(), /*dict=*/nullptr);
+  if (type == nullptr) throw py::error_already_set();
+  m.add_object(name, py::reinterpret_steal<py::object>(type));
+  return type;
+}
+
+void bind_exceptions(py::module_& m) {
+  const py::handle value_error = PyExc_ValueError;
+  const py::handle os_error = PyExc_OSError;
+  auto& t = exception_types;
+  t.error = new_exception(m, "Error", "Base class of every error the sgd_icp library raises.",
+                          py::make_tuple(py::handle(PyExc_Exception)));
+  const py::handle error = t.error;
+  t.invalid_input = new_exception(
+      m, "InvalidInputError",
+      "Input the method cannot work with: a wrong array shape or dtype, an empty or all-NaN "
+      "cloud, fewer points than a mini-batch, a non-rigid initial transform. A ValueError.",
+      py::make_tuple(error, value_error));
+  t.invalid_settings = new_exception(
+      m, "InvalidSettingsError", "A setting out of range or contradicting another. A ValueError.",
+      py::make_tuple(error, value_error));
+  t.format = new_exception(
+      m, "FormatError",
+      "A file whose content is not valid for its format; the message names the file and the "
+      "line or byte where it broke. A ValueError.",
+      py::make_tuple(error, value_error));
+  t.io = new_exception(m, "IoError",
+                       "A file that cannot be opened, read or written; the message names the "
+                       "path and the system's reason. An OSError.",
+                       py::make_tuple(error, os_error));
+
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InvalidInputError& e) {
+      PyErr_SetString(exception_types.invalid_input, e.what());
+    } catch (const InvalidSettingsError& e) {
+      PyErr_SetString(exception_types.invalid_settings, e.what());
+    } catch (const FormatError& e) {
+      PyErr_SetString(exception_types.format, e.what());
+    } catch (const IoError& e) {
+      PyErr_SetString(exception_types.io, e.what());
+    } catch (const Error& e) {
+      PyErr_SetString(exception_types.error, e.what());
+    }
+  });
+}
+
+// ---- reference index
+
+/// A ReferenceIndex shared by the Python object and every registration that uses it, so
+/// it outlives a `del` of the Python object while a registration runs in another thread. It is
+/// never changed after construction (reference normals and covariances are estimated there), so
+/// any number of threads can use it at once.
+struct SharedIndex {
+  ReferenceIndex index;
+  std::size_t non_finite_dropped = 0;
+  double build_ms = 0.0;
+};
+
+/// Builds the KD-tree and gives the reference what `cost` needs (normals or covariances), with
+/// the GIL released.
+std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, std::size_t leaf_size,
+                                         CostType cost, const NeighborhoodSettings& neighborhood) {
+  const py::gil_scoped_release release;
+  const auto start = std::chrono::steady_clock::now();
+  ReferenceIndex index(std::move(converted.cloud), KdTreeSettings{leaf_size});
+  prepare_reference(index, cost, neighborhood);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return std::make_shared<SharedIndex>(
+      SharedIndex{std::move(index), converted.non_finite_dropped, ms});
+}
+
+/// The error of check_reference_features, in the words of the Python API.
+void check_prepared(const SharedIndex& shared, CostType cost) {
+  const PointCloud& cloud = shared.index.cloud();
+  if ((needs_reference_normals(cost) && !cloud.has_normals()) ||
+      (needs_covariances(cost) && !cloud.has_covariances())) {
+    throw InvalidInputError("the " + std::string(to_string(cost)) + " cost needs reference " +
+                            (needs_covariances(cost) ? "covariances" : "normals") +
+                            ": build the index with ReferenceIndex(points, cost='" +
+                            std::string(to_string(cost)) +
+                            "'), or pass the reference points as an array");
+  }
+}
+
+// ---- results as Python sees them: NumPy arrays and plain values
+
+struct Trace {
+  py::array_t<std::int64_t> iteration;
+  py::array_t<std::int64_t> points_processed;
+  py::array_t<double> T_reference_source;
+  py::array_t<double> step_size;
+  py::array_t<double> max_distance_m;
+  py::array_t<std::int64_t> inliers;
+  py::array_t<double> cost;
+};
+
+struct Result {
+  py::array_t<double> T_reference_source;
+  bool converged = false;
+  std::string stop_reason;
+  std::string message;
+  std::size_t iterations = 0;
+  std::size_t points_processed = 0;
+  std::size_t stages = 0;
+  std::size_t evaluated_points = 0;
+  std::size_t inliers = 0;
+  double inlier_ratio = 0.0;
+  double inlier_rmse_m = 0.0;
+  double final_max_distance_m = 0.0;
+  double scale_m = 0.0;
+  double time_ms = 0.0;
+  double constraint_ratio = 0.0;
+  bool degenerate = false;
+  double build_ms = 0.0;
+  std::size_t source_points = 0;
+  std::size_t source_non_finite_dropped = 0;
+  std::size_t reference_points = 0;
+  std::size_t reference_non_finite_dropped = 0;
+  Trace trace;
+};
+
+Trace make_trace(const std::vector<TraceEntry>& entries) {
+  const auto k = static_cast<py::ssize_t>(entries.size());
+  Trace t{py::array_t<std::int64_t>(k),
+          py::array_t<std::int64_t>(k),
+          py::array_t<double>(std::vector<py::ssize_t>{k, 4, 4}),
+          py::array_t<double>(k),
+          py::array_t<double>(k),
+          py::array_t<std::int64_t>(k),
+          py::array_t<double>(k)};
+  auto iteration = t.iteration.mutable_unchecked<1>();
+  auto points = t.points_processed.mutable_unchecked<1>();
+  auto pose = t.T_reference_source.mutable_unchecked<3>();
+  auto step = t.step_size.mutable_unchecked<1>();
+  auto distance = t.max_distance_m.mutable_unchecked<1>();
+  auto inliers = t.inliers.mutable_unchecked<1>();
+  auto cost = t.cost.mutable_unchecked<1>();
+  for (py::ssize_t i = 0; i < k; ++i) {
+    const TraceEntry& e = entries[static_cast<std::size_t>(i)];
+    iteration(i) = static_cast<std::int64_t>(e.iteration);
+    points(i) = static_cast<std::int64_t>(e.points_processed);
+    for (py::ssize_t r = 0; r < 4; ++r) {
+      for (py::ssize_t c = 0; c < 4; ++c) pose(i, r, c) = e.T_reference_source(r, c);
+    }
+    step(i) = e.step_size;
+    distance(i) = e.max_distance_m;
+    inliers(i) = static_cast<std::int64_t>(e.inliers);
+    cost(i) = e.cost;
+  }
+  return t;
+}
+
+Result make_result(const RegistrationResult& r) {
+  Result out;
+  out.T_reference_source = array_from_matrix(r.T_reference_source);
+  out.converged = r.converged;
+  out.stop_reason = std::string(to_string(r.stop_reason));
+  out.message = r.message;
+  out.iterations = r.iterations;
+  out.points_processed = r.points_processed;
+  out.stages = r.stages;
+  out.evaluated_points = r.evaluated_points;
+  out.inliers = r.inliers;
+  out.inlier_ratio = r.inlier_ratio;
+  out.inlier_rmse_m = r.inlier_rmse_m;
+  out.final_max_distance_m = r.final_max_distance_m;
+  out.scale_m = r.scale_m;
+  out.time_ms = r.time_ms;
+  out.constraint_ratio = r.constraint_ratio;
+  out.degenerate = r.degenerate;
+  out.trace = make_trace(r.trace);
+  return out;
+}
+
+// ---- register
+
+/// A copy of `settings` (a Settings), or the defaults for None.
+SgdSettings settings_or_default(const py::handle& settings) {
+  if (settings.is_none()) return SgdSettings{};
+  if (!py::isinstance<SgdSettings>(settings)) {
+    throw py::type_error("settings must be a sgd_icp.Settings or None, got " + type_name(settings));
+  }
+  return settings.cast<SgdSettings>();
+}
+
+Result register_clouds(const py::handle& source, const py::handle& reference,
+                       const py::handle& init, const py::handle& settings,
+                       const py::kwargs& overrides) {
+  const SgdSettings s = with_overrides(settings_or_default(settings), overrides);
+  const Eigen::Matrix4d T_init =
+      init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
+  const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+
+  std::shared_ptr<const SharedIndex> index;
+  double build_ms = 0.0;
+  if (py::isinstance<SharedIndex>(reference)) {
+    index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during align()
+    check_prepared(*index, s.cost);
+  } else {
+    auto built = build_index(cloud_from_array(reference, "reference", NonFinite::drop),
+                             KdTreeSettings{}.leaf_size, s.cost, s.neighborhood);
+    build_ms = built->build_ms;
+    index = std::move(built);
+  }
+
+  const RegistrationResult r = [&] {
+    const py::gil_scoped_release release;
+    return align(src.cloud, index->index, s, T_init);
+  }();
+  Result out = make_result(r);
+  out.build_ms = build_ms;
+  out.source_points = src.cloud.size();
+  out.source_non_finite_dropped = src.non_finite_dropped;
+  out.reference_points = index->index.size();
+  out.reference_non_finite_dropped = index->non_finite_dropped;
+  return out;
+}
+
+// ---- file I/O
+
+FileFormat format_from_object(const py::handle& value) {
+  if (!py::isinstance<py::str>(value)) {
+    throw py::type_error("format must be a str, got " + type_name(value));
+  }
+  const std::string name = value.cast<std::string>();
+  if (name == "auto") return FileFormat::automatic;
+  for (const auto f : {FileFormat::pcd, FileFormat::ply, FileFormat::kitti_bin, FileFormat::xyz,
+                       FileFormat::vtk, FileFormat::f32}) {
+    if (name == to_string(f)) return f;
+  }
+  throw FormatError("unknown format '" + name +
+                    "' (expected 'auto', 'pcd', 'ply', 'kitti_bin', 'xyz', 'vtk' or 'f32')");
+}
+
+Encoding encoding_from_object(const py::handle& value) {
+  const std::string name = py::isinstance<py::str>(value) ? value.cast<std::string>() : "";
+  if (name == "binary") return Encoding::binary;
+  if (name == "ascii") return Encoding::ascii;
+  throw py::value_error("encoding must be 'binary' or 'ascii', got " +
+                        std::string(py::repr(value)));
+}
+
+struct ReadPoints {
+  py::array_t<float> points;
+  std::size_t points_in_file = 0;
+  std::size_t non_finite_dropped = 0;
+  std::string format;
+};
+
+ReadPoints read_points_with_info(const std::filesystem::path& path, const py::handle& format) {
+  const FileFormat f = format_from_object(format);
+  ReadResult read = [&] {
+    const py::gil_scoped_release release;
+    return read_point_cloud(path, f);
+  }();
+  return ReadPoints{array_from_cloud(std::move(read.cloud)), read.points_in_file,
+                    read.non_finite_dropped, to_string(read.format)};
+}
+
+// ---- docstrings
+
+constexpr const char* kRegisterDoc = R"doc(Registers `source` to `reference` with SGD-ICP.
+
+Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
+into the reference frame: p_ref = R @ p_src + t.
+
+Parameters
+----------
+source : (N, 3) float32 or float64 array, metres
+    The cloud that moves. Any memory layout (C, Fortran, strided slices). It is copied once into
+    the library's float32 storage; rows with a NaN or infinite coordinate are dropped and counted
+    (result.source_non_finite_dropped).
+reference : (M, 3) array like `source`, or ReferenceIndex
+    The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
+    also from several threads at once; an array builds one for this call (result.build_ms),
+    with the normals or covariances the cost needs.
+init : (4, 4) array or None, default None (identity)
+    Initial T_reference_source; must be rigid.
+settings : Settings or None, default None (Settings())
+    The base settings.
+**overrides
+    Flat keyword settings applied on top of `settings`, named like the CLI's options:
+    batch_size (160), optimizer ('adam'; also sets learning_rate to that rule's usual value:
+    sgd 2, momentum 2 * (1 - momentum), adam/rmsprop 0.01, gauss-newton 1), learning_rate (0.01,
+    scaled units), max_distance (0.5), min_distance (1e-4) and kernel_scale (0.01) with
+    max_distance_unit ('scaled' or 'm'; a Distance keeps its own unit), max_iterations (4000),
+    seed (2019), momentum (0.9), beta1 (0.9), beta2 (0.999), rms_decay (0.9), epsilon (1e-8),
+    hessian_decay (0.9), damping (1e-3), window (20), chi2 (12.59), path_efficiency (0.5),
+    translation_tolerance (1e-6, scaled units), rotation_tolerance (1e-6, rad),
+    refine_stages (3), step_decay (0.5), distance_factor (3), average (True),
+    scaling_origin ('center'), cost ('point-to-point'; or 'point-to-plane', 'plane-to-plane'),
+    kernel ('none'; or 'huber', 'cauchy', 'geman-mcclure', 'welsch'), trim (1), neighbors (20),
+    check_degeneracy (True), evaluation_points (10000), record_trace (False).
+    See docs/python.md for the settings each one sets.
+
+The GIL is released during the registration (and the KD-tree build), so registrations in
+several Python threads run in parallel.
+
+Raises
+------
+InvalidInputError (ValueError)
+    A wrong shape or dtype, no finite points, fewer source points than batch_size, a non-rigid
+    init.
+InvalidSettingsError (ValueError)
+    An invalid setting.
+TypeError
+    An unknown keyword or a value of the wrong type.
+)doc";
+
+}  // namespace
+
+void define_module(py::module_& m) {
+  m.doc() = "SGD-ICP point-cloud registration (C++ core of the sgd_icp package).";
+  m.attr("__version__") = SGDICP_VERSION;
+
+  bind_exceptions(m);
+  bind_settings(m);
+
+  py::class_<SharedIndex, std::shared_ptr<SharedIndex>>(
+      m, "ReferenceIndex",
+      "A KD-tree over a reference cloud, built once and reused by any number of registrations, "
+      "also from several threads at once (queries are read-only).")
+      .def(py::init([](const py::handle& points, const py::handle& leaf_size,
+                       const py::handle& cost, const py::handle& neighborhood) {
+             const CostType c = cost_from_object(cost, "cost");
+             const NeighborhoodSettings n = neighborhood.is_none()
+                                                ? NeighborhoodSettings{}
+                                                : py::cast<NeighborhoodSettings>(neighborhood);
+             auto converted = cloud_from_array(points, "reference", NonFinite::drop);
+             return build_index(std::move(converted), as_count(leaf_size, "leaf_size"), c, n);
+           }),
+           "points"_a, py::kw_only(), "leaf_size"_a = KdTreeSettings{}.leaf_size,
+           "cost"_a = "point-to-point", "neighborhood"_a = py::none(),
+           "Builds the tree over an (N, 3) float32/float64 array of points in metres (copied "
+           "once into float32 storage; rows with a NaN or infinite coordinate are dropped and "
+           "counted in non_finite_dropped). leaf_size: points per KD-tree leaf, default 10. "
+           "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
+           "estimates the reference normals, 'plane-to-plane' the covariances, with "
+           "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings()). The GIL "
+           "is released during the build.")
+      .def("__len__", [](const SharedIndex& s) { return s.index.size(); })
+      .def_property_readonly(
+          "points",
+          [](const py::object& self) {
+            return readonly_view(self.cast<const SharedIndex&>().index.cloud(), self);
+          },
+          "The indexed points: a read-only (N, 3) float32 view (no copy).")
+      .def_property_readonly(
+          "non_finite_dropped", [](const SharedIndex& s) { return s.non_finite_dropped; },
+          "Rows of the input dropped for a NaN or infinite coordinate.")
+      .def_property_readonly(
+          "build_ms", [](const SharedIndex& s) { return s.build_ms; },
+          "Wall time of the KD-tree build (and of the normals or covariances), milliseconds.")
+      .def_property_readonly(
+          "has_normals", [](const SharedIndex& s) { return s.index.cloud().has_normals(); },
+          "Whether the reference has normals (built with cost='point-to-plane' or "
+          "'plane-to-plane').")
+      .def_property_readonly(
+          "has_covariances", [](const SharedIndex& s) { return s.index.cloud().has_covariances(); },
+          "Whether the reference has covariances (built with cost='plane-to-plane').")
+      .def_property_readonly(
+          "bounding_box",
+          [](const SharedIndex& s) {
+            const BoundingBox& box = s.index.bounding_box();
+            py::array_t<double> lower(3);
+            py::array_t<double> upper(3);
+            for (py::ssize_t i = 0; i < 3; ++i) {
+              lower.mutable_at(i) = box.min[i];
+              upper.mutable_at(i) = box.max[i];
+            }
+            return py::make_tuple(lower, upper);
+          },
+          "(min, max) corners of the axis-aligned bounding box, two (3,) float64 arrays, "
+          "metres.")
+      .def("__repr__", [](const SharedIndex& s) {
+        return "<sgd_icp.ReferenceIndex of " + std::to_string(s.index.size()) + " points (" +
+               std::to_string(s.non_finite_dropped) + " non-finite rows dropped)>";
+      });
+
+  py::class_<Trace>(m, "Trace",
+                    "Per-iteration record of a registration (Settings.record_trace), one array "
+                    "element per iteration.")
+      .def_readonly("iteration", &Trace::iteration, "(K,) int64, iteration number.")
+      .def_readonly("points_processed", &Trace::points_processed,
+                    "(K,) int64, source points drawn so far.")
+      .def_readonly("T_reference_source", &Trace::T_reference_source,
+                    "(K, 4, 4) float64, metric pose after each iteration.")
+      .def_readonly("step_size", &Trace::step_size,
+                    "(K,) float64, effective learning rate of each iteration.")
+      .def_readonly("max_distance_m", &Trace::max_distance_m, "(K,) float64, d_max used, metres.")
+      .def_readonly("inliers", &Trace::inliers, "(K,) int64, pairs kept in each mini-batch.")
+      .def_readonly("cost", &Trace::cost, "(K,) float64, mini-batch cost F, scaled units^2.")
+      .def("__len__", [](const Trace& t) { return t.iteration.size(); })
+      .def("__repr__", [](const Trace& t) {
+        return "<sgd_icp.Trace of " + std::to_string(t.iteration.size()) + " iterations>";
+      });
+
+  py::class_<Result>(m, "RegistrationResult",
+                     "What register() returns: the transform, why it stopped, the work done and "
+                     "the final inlier statistics (every field of the C++ RegistrationResult, "
+                     "plus the point counts and the KD-tree build time).")
+      .def_readonly("T_reference_source", &Result::T_reference_source,
+                    "(4, 4) float64, metres: maps source points into the reference frame, p_ref "
+                    "= R @ p_src + t.")
+      .def_readonly("converged", &Result::converged,
+                    "True if the convergence test passed after all refinement stages.")
+      .def_readonly("stop_reason", &Result::stop_reason,
+                    "'converged', 'max_iterations', 'no_correspondences' or 'diverged'.")
+      .def_readonly("message", &Result::message, "One line on why it stopped.")
+      .def_readonly("iterations", &Result::iterations, "Mini-batches processed.")
+      .def_readonly("points_processed", &Result::points_processed,
+                    "Source points drawn (iterations x batch size).")
+      .def_readonly("stages", &Result::stages, "Stationary stages completed.")
+      .def_readonly("evaluated_points", &Result::evaluated_points,
+                    "Source points (strided sample) in the final inlier statistics.")
+      .def_readonly("inliers", &Result::inliers,
+                    "Of those, with a reference point within the final d_max.")
+      .def_readonly("inlier_ratio", &Result::inlier_ratio, "inliers / evaluated_points.")
+      .def_readonly("inlier_rmse_m", &Result::inlier_rmse_m,
+                    "RMS distance of the inliers to their nearest reference point, metres.")
+      .def_readonly("final_max_distance_m", &Result::final_max_distance_m,
+                    "d_max at the end (after refinement), metres.")
+      .def_readonly("scale_m", &Result::scale_m, "Metres per scaled unit.")
+      .def_readonly("time_ms", &Result::time_ms,
+                    "Wall time of the registration, milliseconds (KD-tree build excluded).")
+      .def_readonly("constraint_ratio", &Result::constraint_ratio,
+                    "Smallest over largest eigenvalue of the point-to-plane information matrix of "
+                    "the final inlier pairs (scaled space); near 0, some motion is not "
+                    "constrained by the data (with check_degeneracy).")
+      .def_readonly("degenerate", &Result::degenerate,
+                    "constraint_ratio below the threshold: the transform is not trustworthy "
+                    "along some motion (see message).")
+      .def_readonly("build_ms", &Result::build_ms,
+                    "Wall time of the KD-tree build (and reference normals/covariances) for an "
+                    "array reference, milliseconds (0 for a ReferenceIndex).")
+      .def_readonly("source_points", &Result::source_points, "Finite source points used.")
+      .def_readonly("source_non_finite_dropped", &Result::source_non_finite_dropped,
+                    "Source rows dropped for a NaN or infinite coordinate.")
+      .def_readonly("reference_points", &Result::reference_points,
+                    "Finite reference points indexed.")
+      .def_readonly("reference_non_finite_dropped", &Result::reference_non_finite_dropped,
+                    "Reference rows dropped for a NaN or infinite coordinate.")
+      .def_readonly("trace", &Result::trace, "Per-iteration Trace; empty unless record_trace=True.")
+      .def("__repr__", [](const Result& r) {
+        return std::string(py::str("<sgd_icp.RegistrationResult {}: {} iterations, {} points "
+                                   "processed, inlier RMSE {:.4g} m ({:.1%} inliers), {:.1f} ms>")
+                               .format(r.stop_reason, r.iterations, r.points_processed,
+                                       r.inlier_rmse_m, r.inlier_ratio, r.time_ms));
+      });
+
+  m.def("register", &register_clouds, kRegisterDoc, "source"_a, "reference"_a,
+        "init"_a = py::none(), "settings"_a = py::none());
+
+  py::class_<ReadPoints>(m, "ReadResult", "A point cloud read from a file, with its counts.")
+      .def_readonly("points", &ReadPoints::points,
+                    "(N, 3) float32 array of the finite points, in file order, metres.")
+      .def_readonly("points_in_file", &ReadPoints::points_in_file,
+                    "Points the file declares or contains (= N + non_finite_dropped).")
+      .def_readonly("non_finite_dropped", &ReadPoints::non_finite_dropped,
+                    "Points dropped for a NaN or infinite coordinate.")
+      .def_readonly("format", &ReadPoints::format,
+                    "The format read: 'pcd', 'ply', 'kitti_bin', 'xyz', 'vtk' or 'f32'.")
+      .def("__repr__", [](const ReadPoints& r) {
+        return "<sgd_icp.ReadResult " + r.format + ": " + std::to_string(r.points.shape(0)) +
+               " points (" + std::to_string(r.non_finite_dropped) + " of " +
+               std::to_string(r.points_in_file) + " dropped as non-finite)>";
+      });
+
+  m.def("read_point_cloud", &read_points_with_info, "path"_a, "format"_a = "auto",
+        "Reads the x y z of every point of a file (PCD, PLY, KITTI .bin, .xyz/.txt/.csv, ASCII "
+        "VTK, .f32; docs/io.md) into a ReadResult. format: 'auto' (from the extension, the "
+        "default), 'pcd', 'ply', 'kitti_bin', 'xyz', 'vtk' or 'f32'. Points with a NaN or "
+        "infinite coordinate are dropped and counted. Raises IoError (OSError) or FormatError "
+        "(ValueError).");
+  m.def(
+      "read_points",
+      [](const std::filesystem::path& path, const py::handle& format) {
+        return read_points_with_info(path, format).points;
+      },
+      "path"_a, "format"_a = "auto",
+      "Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points; see "
+      "read_point_cloud for the formats, the counts and the errors.");
+  m.def(
+      "write_points",
+      [](const std::filesystem::path& path, const py::handle& points, const py::handle& format,
+         const py::handle& encoding) {
+        const FileFormat f = format_from_object(format);
+        const Encoding e = encoding_from_object(encoding);
+        const ConvertedCloud cloud =
+            cloud_from_array(points, "points", NonFinite::keep, /*allow_empty=*/true);
+        const py::gil_scoped_release release;
+        write_point_cloud(path, cloud.cloud, f, e);
+      },
+      "path"_a, "points"_a, "format"_a = "auto", "encoding"_a = "binary",
+      "Writes an (N, 3) float32/float64 array (converted to float32) as PLY, PCD or XYZ, chosen "
+      "from the extension unless format ('ply', 'pcd', 'xyz') is given. encoding: 'binary' "
+      "(default) or 'ascii' (XYZ is always text). Reading the file back gives the same float32 "
+      "values. Raises IoError (OSError) or FormatError (ValueError).");
+
+  m.def(
+      "translation_error",
+      [](const py::handle& T_est, const py::handle& T_gt) {
+        return translation_error(matrix_from_array(T_est, "T_est"),
+                                 matrix_from_array(T_gt, "T_gt"));
+      },
+      "T_est"_a, "T_gt"_a, "|t_est - t_gt| of two (4, 4) transforms, in their unit (metres).");
+  m.def(
+      "rotation_error_geodesic",
+      [](const py::handle& T_est, const py::handle& T_gt) {
+        return rotation_error_geodesic(matrix_from_array(T_est, "T_est"),
+                                       matrix_from_array(T_gt, "T_gt"));
+      },
+      "T_est"_a, "T_gt"_a,
+      "Angle of the relative rotation R_est^T R_gt of two (4, 4) transforms, radians in [0, "
+      "pi].");
+  m.def(
+      "rotation_error_euler_sum",
+      [](const py::handle& T_est, const py::handle& T_gt) {
+        return rotation_error_euler_sum(matrix_from_array(T_est, "T_est"),
+                                        matrix_from_array(T_gt, "T_gt"));
+      },
+      "T_est"_a, "T_gt"_a,
+      "The paper's rotation error: |d roll| + |d pitch| + |d yaw| of two (4, 4) transforms, "
+      "each wrapped to (-pi, pi], radians.");
+}
+
+}  // namespace sgdicp::python
+
+PYBIND11_MODULE(_core, m) {
+  sgdicp::python::define_module(m);
+}

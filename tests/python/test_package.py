@@ -1,0 +1,139 @@
+"""The installed package: its public names, type stubs (py.typed, _core.pyi) and docstrings."""
+
+from __future__ import annotations
+
+import ast
+import enum
+import inspect
+from pathlib import Path
+
+import sgd_icp
+from sgd_icp import _core
+
+STUB = Path(_core.__file__).with_name("_core.pyi")
+
+
+def stub_names() -> dict[str, set[str]]:
+    """Top-level public names of the stub, each with the public members of its class."""
+    tree = ast.parse(STUB.read_text())
+    names: dict[str, set[str]] = {}
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef):
+            members = set()
+            for item in node.body:
+                if isinstance(item, (ast.FunctionDef, ast.AnnAssign, ast.Assign)):
+                    target = (
+                        item.name
+                        if isinstance(item, ast.FunctionDef)
+                        else item.target.id
+                        if isinstance(item, ast.AnnAssign)
+                        else item.targets[0].id
+                    )
+                    if not target.startswith("_"):
+                        members.add(target)
+            names[node.name] = members
+        elif isinstance(node, ast.FunctionDef):
+            names[node.name] = set()
+    return {k: v for k, v in names.items() if not k.startswith("_")}
+
+
+def runtime_members(obj: type) -> set[str]:
+    if issubclass(obj, enum.Enum):
+        return set(obj.__members__)
+    if issubclass(obj, BaseException):
+        return set()
+    return {n for n in vars(obj) if not n.startswith("_")}
+
+
+def test_package_ships_its_stubs():
+    assert STUB.is_file()
+    assert STUB.with_name("py.typed").is_file()
+
+
+def test_stubs_match_the_module():
+    stubs = stub_names()
+    runtime = {n for n in dir(_core) if not n.startswith("_")}
+    assert set(stubs) == runtime
+    for name, members in stubs.items():
+        obj = getattr(_core, name)
+        if isinstance(obj, type):
+            assert members == runtime_members(obj), name
+
+
+def test_everything_public_is_exported_and_documented():
+    assert set(sgd_icp.__all__) == {n for n in dir(_core) if not n.startswith("_")} | {
+        "__version__"
+    }
+    assert sgd_icp.__version__.count(".") == 2
+    for name in sgd_icp.__all__:
+        obj = getattr(sgd_icp, name)
+        if name != "__version__":
+            assert inspect.getdoc(obj), f"{name} has no docstring"
+        if isinstance(obj, type) and not issubclass(obj, (enum.Enum, BaseException)):
+            for member, value in vars(obj).items():
+                if not member.startswith("_") and not isinstance(value, staticmethod):
+                    assert inspect.getdoc(value), f"{name}.{member} has no docstring"
+            assert obj.__module__ == "sgd_icp"
+
+
+def test_register_docstring_lists_every_keyword_with_its_default():
+    doc = inspect.getdoc(sgd_icp.register)
+    for keyword in (
+        "batch_size (160)",
+        "optimizer ('adam'",
+        "learning_rate (0.01",
+        "max_distance (0.5)",
+        "max_distance_unit ('scaled'",
+        "record_trace (False)",
+    ):
+        assert keyword in doc
+
+
+def documented_defaults(doc: str) -> list[str]:
+    """The literals of 'Default X.' in a docstring (X without spaces)."""
+    import re
+
+    return re.findall(r"Default (\S+?)\.(?:\s|$)", doc)
+
+
+def test_documented_defaults_are_the_real_ones():
+    # Every "Default X." in the docstrings of the module and of the stubs must be the value of a
+    # fresh Settings(), so neither can drift from the C++ defaults.
+    settings = sgd_icp.Settings()
+    objects = {
+        "Settings": settings,
+        "OptimizerSettings": settings.optimizer,
+        "ConvergenceSettings": settings.convergence,
+        "RefinementSettings": settings.refinement,
+        "NeighborhoodSettings": settings.neighborhood,
+    }
+    stub_docs = {}
+    for node in ast.parse(STUB.read_text()).body:
+        if isinstance(node, ast.ClassDef) and node.name in objects:
+            body = node.body
+            for item, following in zip(body, body[1:] + [None]):
+                name = (
+                    item.target.id
+                    if isinstance(item, ast.AnnAssign)
+                    else (item.name if isinstance(item, ast.FunctionDef) else None)
+                )
+                doc = None
+                if isinstance(item, ast.FunctionDef):
+                    doc = ast.get_docstring(item)
+                elif isinstance(following, ast.Expr) and isinstance(following.value, ast.Constant):
+                    doc = following.value.value
+                if name and doc:
+                    stub_docs[(node.name, name)] = doc
+    checked = 0
+    namespace = vars(sgd_icp)
+    for class_name, obj in objects.items():
+        for member, descriptor in vars(type(obj)).items():
+            if member.startswith("_") or not isinstance(descriptor, property):
+                continue
+            for doc in (inspect.getdoc(descriptor) or "", stub_docs.get((class_name, member), "")):
+                for literal in documented_defaults(doc):
+                    expected = eval(literal, namespace)
+                    actual = getattr(obj, member)
+                    assert actual == expected, f"{class_name}.{member}: documented {literal}"
+                    checked += 1
+    assert checked >= 50

@@ -1,0 +1,218 @@
+"""Settings mirror the C++ SgdSettings (names and defaults, as in docs/registration.md), and the
+flat keyword overrides mean what docs/python.md says."""
+
+from __future__ import annotations
+
+import copy
+import pickle
+
+import pytest
+
+from sgd_icp import (
+    CostType,
+    Distance,
+    DistanceUnit,
+    KernelType,
+    OptimizerType,
+    ScalingOrigin,
+    Settings,
+)
+
+# The table of docs/registration.md, by attribute path.
+DEFAULTS = {
+    "batch_size": 160,
+    "max_correspondence_distance": Distance.scaled(0.5),
+    "optimizer.type": OptimizerType.adam,
+    "optimizer.learning_rate": 0.01,
+    "optimizer.beta1": 0.9,
+    "optimizer.beta2": 0.999,
+    "optimizer.epsilon": 1e-8,
+    "optimizer.momentum": 0.9,
+    "optimizer.rms_decay": 0.9,
+    "optimizer.hessian_decay": 0.9,
+    "optimizer.damping": 1e-3,
+    "convergence.window": 20,
+    "convergence.chi2": 12.59,
+    "convergence.max_path_efficiency": 0.5,
+    "convergence.translation_tolerance": 1e-6,
+    "convergence.rotation_tolerance": 1e-6,
+    "refinement.stages": 3,
+    "refinement.step_decay": 0.5,
+    "refinement.distance_factor": 3.0,
+    "refinement.min_distance": Distance.scaled(1e-4),
+    "cost": CostType.point_to_point,
+    "kernel": KernelType.none,
+    "kernel_scale": Distance.scaled(0.01),
+    "trim_ratio": 1.0,
+    "neighborhood.k": 20,
+    "neighborhood.num_threads": 0,
+    "neighborhood.regularize": True,
+    "neighborhood.epsilon": 1e-3,
+    "scaling_origin": ScalingOrigin.center,
+    "average_iterates": True,
+    "max_iterations": 4000,
+    "seed": 2019,
+    "evaluation_points": 10000,
+    "record_trace": False,
+    "check_degeneracy": True,
+}
+
+PAPER_CHANGES = {
+    "optimizer.type": OptimizerType.sgd,
+    "optimizer.learning_rate": 2.0,
+    "refinement.stages": 0,
+    "scaling_origin": ScalingOrigin.lower_corner,
+    "average_iterates": False,
+}
+
+
+def get(settings: Settings, path: str):
+    value = settings
+    for part in path.split("."):
+        value = getattr(value, part)
+    return value
+
+
+def test_defaults_are_the_documented_ones():
+    s = Settings()
+    for path, expected in DEFAULTS.items():
+        assert get(s, path) == expected, path
+
+
+def test_paper_presets():
+    for path, expected in {**DEFAULTS, **PAPER_CHANGES}.items():
+        assert get(Settings.paper(), path) == expected, path
+    adam = Settings.paper("adam")
+    assert adam.optimizer.type == OptimizerType.adam and adam.optimizer.learning_rate == 0.01
+    assert Settings.paper(OptimizerType.adam) == adam
+    assert Settings.paper(optimizer="sgd", batch_size=100).batch_size == 100
+
+
+def test_keyword_overrides_set_the_documented_fields():
+    s = Settings(
+        batch_size=100,
+        learning_rate=0.02,
+        max_distance=1.5,
+        max_distance_unit="m",
+        min_distance=0.002,
+        max_iterations=50,
+        seed=7,
+        momentum=0.8,
+        beta1=0.8,
+        beta2=0.99,
+        rms_decay=0.8,
+        epsilon=1e-6,
+        hessian_decay=0.8,
+        damping=0.01,
+        window=10,
+        chi2=10.0,
+        path_efficiency=0.4,
+        translation_tolerance=1e-5,
+        rotation_tolerance=1e-5,
+        refine_stages=2,
+        step_decay=0.6,
+        distance_factor=2.5,
+        average=False,
+        scaling_origin="lower_corner",
+        evaluation_points=0,
+        record_trace=True,
+        cost="point-to-plane",
+        kernel="geman-mcclure",
+        kernel_scale=0.05,
+        trim=0.8,
+        neighbors=12,
+        check_degeneracy=False,
+    )
+    expected = {
+        "batch_size": 100,
+        "optimizer.learning_rate": 0.02,
+        "max_correspondence_distance": Distance.metres(1.5),
+        "refinement.min_distance": Distance.metres(0.002),
+        "max_iterations": 50,
+        "seed": 7,
+        "optimizer.momentum": 0.8,
+        "optimizer.beta1": 0.8,
+        "optimizer.beta2": 0.99,
+        "optimizer.rms_decay": 0.8,
+        "optimizer.epsilon": 1e-6,
+        "optimizer.hessian_decay": 0.8,
+        "optimizer.damping": 0.01,
+        "convergence.window": 10,
+        "convergence.chi2": 10.0,
+        "convergence.max_path_efficiency": 0.4,
+        "convergence.translation_tolerance": 1e-5,
+        "convergence.rotation_tolerance": 1e-5,
+        "refinement.stages": 2,
+        "refinement.step_decay": 0.6,
+        "refinement.distance_factor": 2.5,
+        "average_iterates": False,
+        "scaling_origin": ScalingOrigin.lower_corner,
+        "evaluation_points": 0,
+        "record_trace": True,
+        "cost": CostType.point_to_plane,
+        "kernel": KernelType.geman_mcclure,
+        "kernel_scale": Distance.metres(0.05),
+        "trim_ratio": 0.8,
+        "neighborhood.k": 12,
+        "check_degeneracy": False,
+    }
+    for path, value in expected.items():
+        assert get(s, path) == value, path
+
+
+@pytest.mark.parametrize(
+    "name, rate",
+    [
+        ("sgd", 2.0),
+        ("momentum", 0.2),
+        ("rmsprop", 0.01),
+        ("adam", 0.01),
+        ("gauss-newton", 1.0),
+        ("gauss_newton", 1.0),
+        (OptimizerType.sgd, 2.0),
+    ],
+)
+def test_optimizer_keyword_sets_its_usual_step_like_the_cli(name, rate):
+    s = Settings(optimizer=name)
+    assert s.optimizer.learning_rate == pytest.approx(rate)
+    assert Settings(optimizer=name, learning_rate=0.5).optimizer.learning_rate == 0.5
+
+
+def test_distances_keep_their_unit():
+    s = Settings(max_distance=Distance.metres(2.0), min_distance=0.01)
+    assert s.max_correspondence_distance == Distance.metres(2.0)
+    assert s.refinement.min_distance == Distance.scaled(0.01)
+    d = Distance(3, "m")
+    assert d.unit == DistanceUnit.metres and d.value == 3.0 and repr(d) == "Distance.metres(3.0)"
+    assert d.to_scaled(6.0) == 0.5 and Distance.scaled(0.5).to_scaled(6.0) == 0.5
+
+
+def test_settings_are_values():
+    s = Settings(seed=5)
+    t = s.replace(batch_size=80)
+    assert t.batch_size == 80 and s.batch_size == 160 and t.seed == 5
+    c = copy.deepcopy(s)
+    assert c == s and c is not s
+    c.optimizer.learning_rate = 0.5  # nested attributes are changed in place
+    assert c.optimizer.learning_rate == 0.5 and c != s and s.optimizer.learning_rate == 0.01
+    assert pickle.loads(pickle.dumps(OptimizerType.adam)) is OptimizerType.adam
+
+
+def test_string_names_are_accepted_for_enums():
+    s = Settings()
+    s.optimizer.type = "rmsprop"
+    s.scaling_origin = "corner"
+    s.cost = "plane_to_plane"
+    s.kernel = "huber"
+    assert s.optimizer.type == OptimizerType.rmsprop
+    assert s.scaling_origin == ScalingOrigin.lower_corner
+    assert s.cost == CostType.plane_to_plane and s.kernel == KernelType.huber
+
+
+def test_neighborhood_settings():
+    s = Settings(neighbors=8)
+    s.neighborhood.viewpoint = (0.0, 0.0, 10.0)
+    assert list(s.neighborhood.viewpoint) == [0.0, 0.0, 10.0]
+    assert s.neighborhood.k == 8
+    with pytest.raises(ValueError, match="viewpoint must be 3 numbers"):
+        s.neighborhood.viewpoint = (1.0, 2.0)
