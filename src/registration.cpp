@@ -175,7 +175,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   Optimizer optimizer(settings.optimizer);
   EpochSampler sampler(static_cast<std::uint32_t>(src.size()), settings.seed);
 
-  double d_max = settings.max_correspondence_distance.to_scaled(k);  // scaled units
+  const double d_max_initial = settings.max_correspondence_distance.to_scaled(k);  // scaled
+  double d_max = d_max_initial;
   const double d_min = std::min(d_max, settings.refinement.min_distance.to_scaled(k));
   const double kernel_scale = settings.kernel_scale.to_scaled(k);
   double lr_scale = 1.0;
@@ -263,6 +264,10 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       break;
     }
     empty_batches = inliers == 0 ? empty_batches + 1 : 0;
+    // A refined d_max can fall below the jitter of the steps (an exact copy gives a median pair
+    // distance of 0 while Adam still steps ~alpha): a mini-batch without pairs then widens it
+    // again, up to the initial d_max, instead of losing the data.
+    if (inliers == 0 && d_max < d_max_initial) d_max = std::min(2.0 * d_max, d_max_initial);
     if (empty_batches >= settings.convergence.window) {
       finish(StopReason::no_correspondences,
              "no source point had a reference point within d_max = " + std::to_string(d_max * k) +

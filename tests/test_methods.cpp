@@ -2,6 +2,7 @@
 // GICP) against ground truth; robustness to partial overlap; degenerate geometry reported.
 #include <algorithm>
 #include <filesystem>
+#include <ostream>
 #include <random>
 #include <string>
 #include <vector>
@@ -29,6 +30,11 @@ struct Method {
   bool stochastic;
   CostType cost;
 };
+
+// gtest prints a parameter with this instead of its bytes.
+void PrintTo(const Method& m, std::ostream* os) {
+  *os << m.name;
+}
 
 const std::vector<Method>& all_methods() {
   static const std::vector<Method> methods = {

@@ -36,8 +36,9 @@ struct Distance {
 
 /// Refinement after the paper's coarse phase (our answer to DESIGN's "central problem"). Each
 /// time a stage is stationary (ConvergenceMonitor), d_max shrinks to `distance_factor` times the
-/// median correspondence distance of the stage's last `window` iterations (never growing, never
-/// below `min_distance`) and the step size is multiplied by `step_decay`. After `stages` such
+/// median correspondence distance of the stage's last `window` iterations (never below
+/// `min_distance`; a mini-batch without any pair doubles it again, up to the initial d_max) and
+/// the step size is multiplied by `step_decay`. After `stages` such
 /// stages the run has converged; it then returns the mean of the last stage's iterates after
 /// its first `window` (Polyak averaging), which removes most of the remaining jitter.
 struct RefinementSettings {
