@@ -1,6 +1,11 @@
 #pragma once
 // Everything of the sgdicp library in one include.
+#include "sgdicp/batch_icp.hpp"
+#include "sgdicp/convergence.hpp"
+#include "sgdicp/cost.hpp"
 #include "sgdicp/error.hpp"
+#include "sgdicp/evaluation.hpp"
+#include "sgdicp/features.hpp"
 #include "sgdicp/io.hpp"
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
@@ -9,8 +14,11 @@
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/point_to_point.hpp"
 #include "sgdicp/pose.hpp"
+#include "sgdicp/preprocessing.hpp"
 #include "sgdicp/registration.hpp"
 #include "sgdicp/render.hpp"
+#include "sgdicp/result.hpp"
+#include "sgdicp/robust_kernel.hpp"
 #include "sgdicp/sampler.hpp"
 #include "sgdicp/scaling.hpp"
 #include "sgdicp/transform_io.hpp"
