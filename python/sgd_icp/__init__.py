@@ -5,11 +5,14 @@
 >>> reference = sgd_icp.read_points("scan0.pcd")
 >>> result = sgd_icp.register(source, reference)       # default settings
 >>> result.T_reference_source                          # (4, 4) float64: p_ref = R @ p_src + t
+>>> result = sgd_icp.register(source, reference, method="gicp")   # batch GICP
 
-See docs/python.md for the settings, the keyword overrides and the errors.
+See docs/python.md for the methods, the settings, the keyword overrides, preprocessing and the
+errors.
 """
 
 from ._core import (
+    BatchSettings,
     ConvergenceSettings,
     CostType,
     Distance,
@@ -31,16 +34,21 @@ from ._core import (
     Settings,
     Trace,
     __version__,
+    estimate_covariances,
+    estimate_normals,
+    random_downsample,
     read_point_cloud,
     read_points,
     register,
     rotation_error_euler_sum,
     rotation_error_geodesic,
     translation_error,
+    voxel_downsample,
     write_points,
 )
 
 __all__ = [
+    "BatchSettings",
     "ConvergenceSettings",
     "CostType",
     "Distance",
@@ -62,12 +70,16 @@ __all__ = [
     "Settings",
     "Trace",
     "__version__",
+    "estimate_covariances",
+    "estimate_normals",
+    "random_downsample",
     "read_point_cloud",
     "read_points",
     "register",
     "rotation_error_euler_sum",
     "rotation_error_geodesic",
     "translation_error",
+    "voxel_downsample",
     "write_points",
 ]
 

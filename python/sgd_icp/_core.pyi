@@ -7,7 +7,7 @@ radians.
 
 import enum
 import os
-from typing import Any, Union
+from typing import Any, Literal, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +25,7 @@ _CostName = Union["CostType", str]
 _KernelName = Union["KernelType", str]
 _UnitName = Union["DistanceUnit", str]
 _DistanceValue = Union[float, "Distance"]
+_MethodName = Literal["sgd", "sgd-plane", "sgd-gicp", "icp", "icp-plane", "gicp"]
 
 # ---- errors
 
@@ -420,6 +421,93 @@ class Settings:
     def __deepcopy__(self, memo: Any) -> Settings: ...
 
 
+class BatchSettings:
+    """Settings of the batch methods (register(method='icp' | 'icp-plane' | 'gicp')): the C++
+    sgdicp::BatchSettings, same names and defaults. Every iteration pairs all source points with
+    their nearest reference point within d_max, then takes the closed-form SVD step
+    (point-to-point) or one damped Gauss-Newton step (the plane costs).
+
+    BatchSettings(**overrides) is the default (point-to-point) with the batch keyword overrides of
+    register() applied; BatchSettings.icp(), .icp_plane() and .gicp() set the cost.
+    """
+
+    cost: CostType
+    """Cost of a pair (assign a name too). register(method=...) replaces it with the method's
+    cost. Default CostType.point_to_point."""
+    max_correspondence_distance: Distance
+    """d_max: pairs farther apart are rejected (scaled: fraction of the largest side of the joint
+    bounding box). Default Distance.scaled(0.05)."""
+    kernel: KernelType
+    """Robust kernel on each pair's residual (assign a name too). Default KernelType.none."""
+    kernel_scale: Distance
+    """Residual size where the kernel starts to down-weight. Default Distance.scaled(0.01)."""
+    trim_ratio: float
+    """Keep only this fraction of each iteration's pairs, the closest ones (trimmed ICP), in
+    (0, 1]. Default 1."""
+    max_iterations: int
+    """Iteration limit (passes over the source); reaching it means not converged. Default 100."""
+    translation_tolerance: float
+    """Converged when an iteration moves the translation less than this (scaled units) ...
+    Default 1e-5."""
+    rotation_tolerance: float
+    """... and the rotation less than this (rotation angle, rad). Default 1e-5."""
+    initial_damping: float
+    """Initial Levenberg-Marquardt damping, relative to the mean diagonal of J^T J; 0 = plain
+    Gauss-Newton; unused by point-to-point. Default 1e-6."""
+    neighborhood: NeighborhoodSettings
+    """Neighbourhoods for the normals and covariances of the plane costs."""
+    evaluation_points: int
+    """Source points (strided) for the final inlier statistics; 0 = all. Default 10000."""
+    check_degeneracy: bool
+    """Check the final alignment for degenerate geometry and report it in
+    RegistrationResult.constraint_ratio / degenerate. Default True."""
+
+    def __init__(
+        self,
+        *,
+        max_distance: _DistanceValue = ...,
+        max_distance_unit: _UnitName = ...,
+        max_iterations: int = ...,
+        kernel: _KernelName = ...,
+        kernel_scale: _DistanceValue = ...,
+        trim: float = ...,
+        neighbors: int = ...,
+        damping: float = ...,
+        translation_tolerance: float = ...,
+        rotation_tolerance: float = ...,
+        evaluation_points: int = ...,
+        check_degeneracy: bool = ...,
+        cost: _CostName = ...,
+    ) -> None:
+        """The default settings (point-to-point ICP) with the batch keyword overrides applied
+        (see register(); damping sets initial_damping, trim trim_ratio, neighbors
+        neighborhood.k)."""
+
+    @staticmethod
+    def icp(**overrides: Any) -> BatchSettings:
+        """Point-to-point ICP (Besl-McKay; closed-form SVD step), then the keyword overrides."""
+
+    @staticmethod
+    def icp_plane(**overrides: Any) -> BatchSettings:
+        """Point-to-plane ICP (Chen-Medioni; Levenberg-Marquardt step), then the keyword
+        overrides."""
+
+    @staticmethod
+    def gicp(**overrides: Any) -> BatchSettings:
+        """Plane-to-plane GICP (Segal et al.; Levenberg-Marquardt step), then the keyword
+        overrides."""
+
+    def replace(self, **overrides: Any) -> BatchSettings:
+        """A copy with the batch keyword overrides applied."""
+
+    def validate(self) -> None:
+        """Raises InvalidSettingsError naming the first invalid setting."""
+
+    def __eq__(self, other: object) -> bool: ...
+    def __copy__(self) -> BatchSettings: ...
+    def __deepcopy__(self, memo: Any) -> BatchSettings: ...
+
+
 # ---- registration
 
 
@@ -446,7 +534,10 @@ class ReferenceIndex:
             neighborhood: how normals and covariances are estimated. Default None =
                 NeighborhoodSettings().
 
-        The GIL is released during the build; the index never changes afterwards."""
+        The GIL is released during the build; the index never changes afterwards: a
+        registration whose method needs normals ('sgd-plane', 'icp-plane', cost='point-to-plane')
+        or covariances ('sgd-gicp', 'gicp', cost='plane-to-plane') that the index lacks raises
+        InvalidInputError instead of adding them."""
 
     def __len__(self) -> int: ...
     @property
@@ -575,7 +666,8 @@ def register(
     source: _Points,
     reference: Union[_Points, ReferenceIndex],
     init: _Transform | None = None,
-    settings: Settings | None = None,
+    settings: Settings | BatchSettings | None = None,
+    method: _MethodName = "sgd",
     *,
     batch_size: int = ...,
     optimizer: _OptimizerName = ...,
@@ -611,15 +703,31 @@ def register(
     evaluation_points: int = ...,
     record_trace: bool = ...,
 ) -> RegistrationResult:
-    """Registers `source` to `reference` with SGD-ICP; the GIL is released while it runs.
+    """Registers `source` to `reference` with SGD-ICP or a batch ICP method; the GIL is released
+    while it runs.
 
     Args:
         source: (N, 3) float32/float64 array, metres, any memory layout: the cloud that moves.
             Copied once into float32; rows with a NaN or inf are dropped and counted.
         reference: (M, 3) array like `source`, or a ReferenceIndex (built once, reusable, also
-            from several threads at once).
+            from several threads at once). A ReferenceIndex must have the normals / covariances
+            of the method's cost: build it with ReferenceIndex(points, cost=...).
         init: initial T_reference_source, (4, 4) rigid; default None = identity.
-        settings: base Settings; default None = Settings().
+        settings: base settings: a Settings for the SGD methods (default None = Settings()), a
+            BatchSettings for the batch methods (default None = BatchSettings(); the method sets
+            its cost).
+        method: the CLI's --method. 'sgd' (SGD-ICP with the settings' cost, point-to-point by
+            default), 'sgd-plane' / 'sgd-gicp' (SGD-ICP on point-to-plane / plane-to-plane),
+            'icp' (batch point-to-point, closed-form SVD step), 'icp-plane' / 'gicp' (batch
+            point-to-plane / plane-to-plane, Levenberg-Marquardt). All but 'sgd' set the cost
+            (cost= is then an error). Default 'sgd'.
+
+        The batch methods take only max_distance (default 0.05 scaled), max_distance_unit,
+        max_iterations (100), kernel, kernel_scale, trim, neighbors, damping (the initial
+        Levenberg-Marquardt damping, default 1e-6), translation_tolerance (1e-5 scaled units),
+        rotation_tolerance (1e-5 rad), evaluation_points and check_degeneracy; the defaults
+        below are those of the SGD methods.
+
         batch_size: source points per mini-batch (m). Default 160.
         optimizer: 'sgd', 'momentum', 'rmsprop', 'adam' or 'gauss-newton'. Default 'adam'.
             Also sets learning_rate to that rule's usual value (sgd 2, momentum 2 * (1 - momentum),
@@ -669,9 +777,100 @@ def register(
 
     Raises:
         InvalidInputError: (a ValueError) wrong shape or dtype, no finite points, fewer source
-            points than batch_size, a non-rigid init.
-        InvalidSettingsError: (a ValueError) an invalid setting.
-        TypeError: an unknown keyword or a value of the wrong type.
+            points than batch_size, a non-rigid init, a ReferenceIndex without the normals /
+            covariances of the method's cost.
+        InvalidSettingsError: (a ValueError) an invalid setting or an unknown method.
+        TypeError: an unknown keyword, a keyword of the other solver, or a value of the wrong
+            type.
+    """
+
+
+# ---- preprocessing
+
+
+def voxel_downsample(points: _Points, voxel_size_m: float) -> npt.NDArray[np.float32]:
+    """One point per occupied cubic voxel of side voxel_size_m (metres): the centroid of the
+    points in it, in the order of each voxel's first point (deterministic).
+
+    Args:
+        points: (N, 3) float32/float64 array, metres; rows with a NaN or inf are dropped first.
+            May be empty.
+        voxel_size_m: voxel side, metres, positive and finite.
+
+    Returns:
+        (M, 3) float32 array, metres, M <= N.
+
+    Raises:
+        InvalidSettingsError: (a ValueError) voxel_size_m not positive and finite, or too small.
+        InvalidInputError: (a ValueError) not an (N, 3) float32/float64 array.
+    """
+
+
+def random_downsample(points: _Points, count: int, seed: int = 2019) -> npt.NDArray[np.float32]:
+    """`count` distinct points chosen uniformly at random without replacement, in input order.
+
+    Args:
+        points: (N, 3) float32/float64 array, metres; rows with a NaN or inf are dropped first.
+            May be empty.
+        count: points to keep, >= 0; count >= N keeps all.
+        seed: seed of the draw; the same input, count and seed give the same points on any
+            platform. Default 2019.
+
+    Returns:
+        (min(count, N), 3) float32 array, metres.
+    """
+
+
+def estimate_normals(
+    points: _Points,
+    k: int = 20,
+    num_threads: int = 0,
+    *,
+    viewpoint: npt.ArrayLike | None = None,
+) -> npt.NDArray[np.float32]:
+    """Unit normals (PCA of the k nearest neighbours, the point included), flipped to face
+    `viewpoint`; (0, 0, 0) for degenerate (identical or collinear) neighbourhoods.
+
+    Args:
+        points: (N, 3) float32/float64 array, metres; every row must be finite.
+        k: neighbours per point, in [3, 1000]. Default 20.
+        num_threads: worker threads, 0 = all cores (same results for any count). Default 0.
+        viewpoint: (3,) point in metres the normals face; None = the origin. Default None.
+
+    Returns:
+        (N, 3) float32 array, one normal per input row.
+
+    Raises:
+        InvalidInputError: (a ValueError) bad array, no rows, or a non-finite row.
+        InvalidSettingsError: (a ValueError) k or num_threads out of range.
+    """
+
+
+def estimate_covariances(
+    points: _Points,
+    k: int = 20,
+    num_threads: int = 0,
+    *,
+    regularize: bool = True,
+    epsilon: float = 1e-3,
+) -> npt.NDArray[np.float32]:
+    """Local covariances of the k nearest neighbours (the point included): raw (1/n, m^2) or, with
+    regularize=True, the unitless GICP plane model V diag(epsilon, 1, 1) V^T (identity for
+    degenerate neighbourhoods).
+
+    Args:
+        points: (N, 3) float32/float64 array, metres; every row must be finite.
+        k: neighbours per point, in [3, 1000]. Default 20.
+        num_threads: worker threads, 0 = all cores (same results for any count). Default 0.
+        regularize: return the plane model instead of the raw covariance. Default True.
+        epsilon: variance along the normal in the plane model, in (0, 1]. Default 1e-3.
+
+    Returns:
+        (N, 3, 3) float32 array of symmetric matrices, one per input row.
+
+    Raises:
+        InvalidInputError: (a ValueError) bad array, no rows, or a non-finite row.
+        InvalidSettingsError: (a ValueError) k, num_threads or epsilon out of range.
     """
 
 

@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 #include <Eigen/Core>
 
+#include "sgdicp/batch_icp.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/registration.hpp"
 
@@ -64,13 +65,26 @@ struct ConvertedCloud {
 
 // ---- settings (settings.cpp)
 
-/// Binds Distance, DistanceUnit, OptimizerType, ScalingOrigin and the settings classes.
+/// Binds Distance, DistanceUnit, OptimizerType, ScalingOrigin and the settings classes
+/// (Settings, BatchSettings and their parts).
 void bind_settings(py::module_& m);
 
 /// `base` with the flat keyword overrides of docs/python.md applied (the names of the CLI's
 /// options), then validated. Throws TypeError for an unknown keyword or a value of the wrong
 /// type, and InvalidSettingsError (ValueError) for an invalid value.
 [[nodiscard]] SgdSettings with_overrides(SgdSettings base, const py::dict& overrides);
+
+/// `base` with the batch keyword overrides of docs/python.md applied (the CLI's options that apply
+/// to the batch methods, plus `cost`), then validated. `method` names the batch method in error
+/// messages ("" for BatchSettings(...) itself). Throws TypeError for a keyword that is unknown or
+/// applies to the SGD methods only, and InvalidSettingsError for an invalid value.
+[[nodiscard]] BatchSettings with_batch_overrides(BatchSettings base, const py::dict& overrides,
+                                                 std::string_view method);
+
+// ---- preprocessing (preprocessing.cpp)
+
+/// Binds voxel_downsample, random_downsample, estimate_normals and estimate_covariances.
+void bind_preprocessing(py::module_& m);
 
 // ---- the module (module.cpp)
 

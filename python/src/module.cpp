@@ -1,9 +1,11 @@
 // The Python module sgd_icp._core: registration, reference indexes, results, file I/O, metrics
 // and the library's errors as Python exceptions. The public names are re-exported by
 // sgd_icp/__init__.py; sgd_icp/_core.pyi documents them for type checkers and IDEs.
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -11,6 +13,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "bindings.hpp"
+#include "sgdicp/batch_icp.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/features.hpp"
 #include "sgdicp/io.hpp"
@@ -219,38 +222,81 @@ Result make_result(const RegistrationResult& r) {
 
 // ---- register
 
+/// A --method of the CLI: the solver and, but for "sgd" (whose cost is the settings'), the cost.
+struct Method {
+  std::string name;
+  bool stochastic = true;
+  std::optional<CostType> cost;
+};
+
+Method method_from_object(const py::handle& value) {
+  if (!py::isinstance<py::str>(value)) {
+    throw py::type_error("method must be a str ('sgd', 'sgd-plane', 'sgd-gicp', 'icp', "
+                         "'icp-plane' or 'gicp'), got " +
+                         type_name(value));
+  }
+  std::string name = value.cast<std::string>();
+  std::replace(name.begin(), name.end(), '_', '-');
+  Method m{name, name.rfind("sgd", 0) == 0, std::nullopt};
+  if (name == "sgd") return m;
+  if (name == "sgd-plane" || name == "icp-plane") {
+    m.cost = CostType::point_to_plane;
+  } else if (name == "sgd-gicp" || name == "gicp") {
+    m.cost = CostType::plane_to_plane;
+  } else if (name == "icp") {
+    m.cost = CostType::point_to_point;
+  } else {
+    throw InvalidSettingsError("unknown method '" + value.cast<std::string>() +
+                               "' (expected 'sgd', 'sgd-plane', 'sgd-gicp', 'icp', 'icp-plane' "
+                               "or 'gicp')");
+  }
+  return m;
+}
+
 /// A copy of `settings` (a Settings), or the defaults for None.
-SgdSettings settings_or_default(const py::handle& settings) {
+SgdSettings settings_or_default(const py::handle& settings, const Method& method) {
   if (settings.is_none()) return SgdSettings{};
   if (!py::isinstance<SgdSettings>(settings)) {
-    throw py::type_error("settings must be a sgd_icp.Settings or None, got " + type_name(settings));
+    throw py::type_error("settings must be a sgd_icp.Settings or None, got " + type_name(settings) +
+                         (py::isinstance<BatchSettings>(settings)
+                              ? " (a BatchSettings is for method='icp', 'icp-plane' or 'gicp'; "
+                                "method='" +
+                                    method.name + "' takes a Settings)"
+                              : std::string()));
   }
   return settings.cast<SgdSettings>();
 }
 
-Result register_clouds(const py::handle& source, const py::handle& reference,
-                       const py::handle& init, const py::handle& settings,
-                       const py::kwargs& overrides) {
-  const SgdSettings s = with_overrides(settings_or_default(settings), overrides);
-  const Eigen::Matrix4d T_init =
-      init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
-  const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+/// A copy of `settings` (a BatchSettings), or the defaults for None.
+BatchSettings batch_settings_or_default(const py::handle& settings, const Method& method) {
+  if (settings.is_none()) return BatchSettings{};
+  if (!py::isinstance<BatchSettings>(settings)) {
+    throw py::type_error("settings must be a sgd_icp.BatchSettings or None for the batch method '" +
+                         method.name + "', got " + type_name(settings));
+  }
+  return settings.cast<BatchSettings>();
+}
 
+/// Registration with either solver: the index (given, or built with the features `cost` needs),
+/// then `run(index)` with the GIL released.
+template <typename Run>
+Result register_with(const ConvertedCloud& src, const py::handle& reference, CostType cost,
+                     const NeighborhoodSettings& neighborhood, Run run) {
   std::shared_ptr<const SharedIndex> index;
   double build_ms = 0.0;
   if (py::isinstance<SharedIndex>(reference)) {
-    index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during align()
-    check_prepared(*index, s.cost);
+    index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during the run
+    check_prepared(*index, cost);
   } else {
     auto built = build_index(cloud_from_array(reference, "reference", NonFinite::drop),
-                             KdTreeSettings{}.leaf_size, s.cost, s.neighborhood);
+                             KdTreeSettings{}.leaf_size, cost, neighborhood);
     build_ms = built->build_ms;
     index = std::move(built);
   }
 
   const RegistrationResult r = [&] {
     const py::gil_scoped_release release;
-    return align(src.cloud, index->index, s, T_init);
+    return run(index->index);
   }();
   Result out = make_result(r);
   out.build_ms = build_ms;
@@ -259,6 +305,37 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
   out.reference_points = index->index.size();
   out.reference_non_finite_dropped = index->non_finite_dropped;
   return out;
+}
+
+Result register_clouds(const py::handle& source, const py::handle& reference,
+                       const py::handle& init, const py::handle& settings,
+                       const py::handle& method, const py::kwargs& overrides) {
+  const Method m = method_from_object(method);
+  if (m.cost && overrides.contains("cost")) {
+    throw InvalidSettingsError("method='" + m.name +
+                               "' sets the cost; drop cost= (or use method='sgd' with cost=)");
+  }
+  if (m.stochastic) {
+    SgdSettings base = settings_or_default(settings, m);
+    if (m.cost) base.cost = *m.cost;
+    const SgdSettings s = with_overrides(base, overrides);
+    const Eigen::Matrix4d T_init =
+        init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
+    const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+    return register_with(src, reference, s.cost, s.neighborhood,
+                         [&](const ReferenceIndex& index) {
+                           return align(src.cloud, index, s, T_init);
+                         });
+  }
+  BatchSettings base = batch_settings_or_default(settings, m);
+  base.cost = *m.cost;
+  const BatchSettings b = with_batch_overrides(base, overrides, m.name);
+  const Eigen::Matrix4d T_init =
+      init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
+  const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+  return register_with(src, reference, b.cost, b.neighborhood, [&](const ReferenceIndex& index) {
+    return align_batch(src.cloud, index, b, T_init);
+  });
 }
 
 // ---- file I/O
@@ -304,7 +381,7 @@ ReadPoints read_points_with_info(const std::filesystem::path& path, const py::ha
 
 // ---- docstrings
 
-constexpr const char* kRegisterDoc = R"doc(Registers `source` to `reference` with SGD-ICP.
+constexpr const char* kRegisterDoc = R"doc(Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
 Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
 into the reference frame: p_ref = R @ p_src + t.
@@ -321,10 +398,22 @@ reference : (M, 3) array like `source`, or ReferenceIndex
     with the normals or covariances the cost needs.
 init : (4, 4) array or None, default None (identity)
     Initial T_reference_source; must be rigid.
-settings : Settings or None, default None (Settings())
-    The base settings.
+settings : Settings, BatchSettings or None, default None
+    The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
+    the batch methods (None = BatchSettings(), whose cost the method sets).
+method : str, default 'sgd'
+    The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-point by default),
+    'sgd-plane' / 'sgd-gicp' (SGD-ICP on point-to-plane / plane-to-plane), 'icp' (batch
+    point-to-point, closed-form SVD step), 'icp-plane' (batch point-to-plane) or 'gicp' (batch
+    plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
+    error). An unknown name raises InvalidSettingsError.
 **overrides
-    Flat keyword settings applied on top of `settings`, named like the CLI's options:
+    Flat keyword settings applied on top of `settings`, named like the CLI's options. For the
+    batch methods: max_distance (0.05) and kernel_scale (0.01) with max_distance_unit,
+    max_iterations (100), kernel ('none'), trim (1), neighbors (20), damping (1e-6: the initial
+    Levenberg-Marquardt damping), translation_tolerance (1e-5, scaled units), rotation_tolerance
+    (1e-5, rad), evaluation_points (10000), check_degeneracy (True); any other raises TypeError.
+    For the SGD methods:
     batch_size (160), optimizer ('adam'; also sets learning_rate to that rule's usual value:
     sgd 2, momentum 2 * (1 - momentum), adam/rmsprop 0.01, gauss-newton 1), learning_rate (0.01,
     scaled units), max_distance (0.5), min_distance (1e-4) and kernel_scale (0.01) with
@@ -345,11 +434,12 @@ Raises
 ------
 InvalidInputError (ValueError)
     A wrong shape or dtype, no finite points, fewer source points than batch_size, a non-rigid
-    init.
+    init, a ReferenceIndex without the normals or covariances of the method's cost (build it
+    with ReferenceIndex(points, cost=...)).
 InvalidSettingsError (ValueError)
-    An invalid setting.
+    An invalid setting or method name.
 TypeError
-    An unknown keyword or a value of the wrong type.
+    An unknown keyword, a keyword of the other solver, or a value of the wrong type.
 )doc";
 
 }  // namespace
@@ -360,6 +450,7 @@ void define_module(py::module_& m) {
 
   bind_exceptions(m);
   bind_settings(m);
+  bind_preprocessing(m);
 
   py::class_<SharedIndex, std::shared_ptr<SharedIndex>>(
       m, "ReferenceIndex",
@@ -382,7 +473,9 @@ void define_module(py::module_& m) {
            "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
            "estimates the reference normals, 'plane-to-plane' the covariances, with "
            "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings()). The GIL "
-           "is released during the build.")
+           "is released during the build. The index never changes afterwards: a registration "
+           "whose method or cost needs normals or covariances the index lacks raises "
+           "InvalidInputError instead of adding them.")
       .def("__len__", [](const SharedIndex& s) { return s.index.size(); })
       .def_property_readonly(
           "points",
@@ -494,7 +587,7 @@ void define_module(py::module_& m) {
       });
 
   m.def("register", &register_clouds, kRegisterDoc, "source"_a, "reference"_a,
-        "init"_a = py::none(), "settings"_a = py::none());
+        "init"_a = py::none(), "settings"_a = py::none(), "method"_a = "sgd");
 
   py::class_<ReadPoints>(m, "ReadResult", "A point cloud read from a file, with its counts.")
       .def_readonly("points", &ReadPoints::points,

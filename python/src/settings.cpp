@@ -11,6 +11,7 @@
 #include <pybind11/native_enum.h>
 
 #include "bindings.hpp"
+#include "sgdicp/batch_icp.hpp"
 #include "sgdicp/error.hpp"
 
 namespace sgdicp::python {
@@ -244,6 +245,65 @@ std::string keyword_list() {
   throw py::type_error(message + "; the keyword settings are: " + keyword_list());
 }
 
+// ---- the keyword overrides of the batch methods (BatchSettings): the CLI's options that apply
+// to them (apps/cli_settings.hpp, make_method), plus `cost` for BatchSettings(...) itself
+
+using BatchApply = void (*)(BatchSettings&, const py::handle&, Distance::Unit);
+
+struct BatchKeyword {
+  std::string_view name;
+  BatchApply apply;
+};
+
+constexpr std::array kBatchKeywords{
+    BatchKeyword{"max_distance",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit u) {
+                   s.max_correspondence_distance = distance_or_number(v, u, "max_distance");
+                 }},
+    BatchKeyword{"max_iterations",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.max_iterations = as_count(v, "max_iterations");
+                 }},
+    BatchKeyword{"kernel", [](BatchSettings& s, const py::handle& v,
+                              Distance::Unit) { s.kernel = kernel_from_object(v, "kernel"); }},
+    BatchKeyword{"kernel_scale",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit u) {
+                   s.kernel_scale = distance_or_number(v, u, "kernel_scale");
+                 }},
+    BatchKeyword{"trim", [](BatchSettings& s, const py::handle& v,
+                            Distance::Unit) { s.trim_ratio = as_real(v, "trim"); }},
+    BatchKeyword{"neighbors",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.neighborhood.k = as_count(v, "neighbors");
+                 }},
+    BatchKeyword{"damping", [](BatchSettings& s, const py::handle& v,
+                               Distance::Unit) { s.initial_damping = as_real(v, "damping"); }},
+    BatchKeyword{"translation_tolerance",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.translation_tolerance = as_real(v, "translation_tolerance");
+                 }},
+    BatchKeyword{"rotation_tolerance",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.rotation_tolerance = as_real(v, "rotation_tolerance");
+                 }},
+    BatchKeyword{"evaluation_points",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.evaluation_points = as_count(v, "evaluation_points");
+                 }},
+    BatchKeyword{"check_degeneracy",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.check_degeneracy = as_bool(v, "check_degeneracy");
+                 }},
+    BatchKeyword{"cost", [](BatchSettings& s, const py::handle& v,
+                            Distance::Unit) { s.cost = cost_from_object(v, "cost"); }},
+};
+
+std::string batch_keyword_list() {
+  std::string list = "max_distance_unit";
+  for (const auto& k : kBatchKeywords) list += ", " + std::string(k.name);
+  return list;
+}
+
 // ---- repr and equality
 
 std::string repr(const Distance& d) {
@@ -346,6 +406,27 @@ bool same(const SgdSettings& a, const SgdSettings& b) {
          a.max_iterations == b.max_iterations && a.seed == b.seed &&
          a.average_iterates == b.average_iterates && a.evaluation_points == b.evaluation_points &&
          a.record_trace == b.record_trace && a.check_degeneracy == b.check_degeneracy;
+}
+
+std::string repr(const BatchSettings& s) {
+  return py::str(
+             "BatchSettings(cost=CostType.{}, max_correspondence_distance={}, "
+             "kernel=KernelType.{}, kernel_scale={}, trim_ratio={!r}, max_iterations={!r}, "
+             "translation_tolerance={!r}, rotation_tolerance={!r}, initial_damping={!r}, "
+             "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r})")
+      .format(cost_name(s.cost), repr(s.max_correspondence_distance), kernel_name(s.kernel),
+              repr(s.kernel_scale), s.trim_ratio, s.max_iterations, s.translation_tolerance,
+              s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
+              s.check_degeneracy);
+}
+bool same(const BatchSettings& a, const BatchSettings& b) {
+  return a.cost == b.cost && same(a.max_correspondence_distance, b.max_correspondence_distance) &&
+         a.kernel == b.kernel && same(a.kernel_scale, b.kernel_scale) &&
+         a.trim_ratio == b.trim_ratio && a.max_iterations == b.max_iterations &&
+         a.translation_tolerance == b.translation_tolerance &&
+         a.rotation_tolerance == b.rotation_tolerance && a.initial_damping == b.initial_damping &&
+         same(a.neighborhood, b.neighborhood) && a.evaluation_points == b.evaluation_points &&
+         a.check_degeneracy == b.check_degeneracy;
 }
 
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
@@ -469,6 +550,43 @@ SgdSettings with_overrides(SgdSettings s, const py::dict& overrides) {
     throw InvalidSettingsError(
         "max_distance_unit applies to max_distance, min_distance and kernel_scale given as "
         "numbers, and none is");
+  }
+  s.validate();
+  return s;
+}
+
+BatchSettings with_batch_overrides(BatchSettings s, const py::dict& overrides,
+                                   std::string_view method) {
+  bool numeric_distance = false;
+  Distance::Unit unit = Distance::Unit::scaled;
+  if (overrides.contains("max_distance_unit")) {
+    unit = unit_from_object(overrides["max_distance_unit"], "max_distance_unit");
+  }
+  for (const auto& [key, value] : overrides) {
+    const std::string name = py::str(key);
+    if (name == "max_distance_unit") continue;
+    const auto* keyword = std::find_if(kBatchKeywords.begin(), kBatchKeywords.end(),
+                                       [&](const BatchKeyword& k) { return k.name == name; });
+    if (keyword == kBatchKeywords.end()) {
+      const bool sgd_only = std::any_of(kKeywords.begin(), kKeywords.end(),
+                                        [&](const Keyword& k) { return k.name == name; }) ||
+                            name == "optimizer";
+      std::string message =
+          sgd_only ? "setting '" + name + "' applies to the SGD methods only, not to "
+                   : "unknown setting '" + name + "' for ";
+      message += method.empty() ? std::string("BatchSettings")
+                                : "the batch method '" + std::string(method) + "'";
+      throw py::type_error(message + "; the batch keyword settings are: " + batch_keyword_list());
+    }
+    if ((name == "max_distance" || name == "kernel_scale") && !py::isinstance<Distance>(value)) {
+      numeric_distance = true;
+    }
+    keyword->apply(s, value, unit);
+  }
+  if (overrides.contains("max_distance_unit") && !numeric_distance) {
+    throw InvalidSettingsError(
+        "max_distance_unit applies to max_distance and kernel_scale given as numbers, and none "
+        "is");
   }
   s.validate();
   return s;
@@ -735,6 +853,88 @@ void bind_settings(py::module_& m) {
            "Check the final alignment for degenerate geometry (a plane, a corridor) and report "
            "it in RegistrationResult.constraint_ratio / degenerate. Default True.");
   def_value_methods(settings);
+
+  py::class_<BatchSettings> batch(
+      m, "BatchSettings",
+      "Settings of the batch methods (register(method='icp' | 'icp-plane' | 'gicp')): the C++ "
+      "sgdicp::BatchSettings, same names and defaults. Every iteration pairs all source points "
+      "with their nearest reference point within d_max, then takes the closed-form SVD step "
+      "(point-to-point) or one damped Gauss-Newton step (the plane costs).\n\n"
+      "BatchSettings(**overrides) is the default (point-to-point) with the batch keyword "
+      "overrides of register() applied (max_distance, max_distance_unit, max_iterations, kernel, "
+      "kernel_scale, trim, neighbors, damping, translation_tolerance, rotation_tolerance, "
+      "evaluation_points, check_degeneracy, cost).");
+  batch
+      .def(py::init([](const py::kwargs& overrides) {
+             return with_batch_overrides(BatchSettings{}, overrides, "");
+           }),
+           "The default settings (point-to-point ICP) with the batch keyword overrides applied.")
+      .def_static(
+          "icp",
+          [](const py::kwargs& overrides) {
+            return with_batch_overrides(BatchSettings::icp(), overrides, "");
+          },
+          "Point-to-point ICP (Besl-McKay; closed-form SVD step), then the keyword overrides.")
+      .def_static(
+          "icp_plane",
+          [](const py::kwargs& overrides) {
+            return with_batch_overrides(BatchSettings::icp_plane(), overrides, "");
+          },
+          "Point-to-plane ICP (Chen-Medioni; Levenberg-Marquardt step), then the keyword "
+          "overrides.")
+      .def_static(
+          "gicp",
+          [](const py::kwargs& overrides) {
+            return with_batch_overrides(BatchSettings::gicp(), overrides, "");
+          },
+          "Plane-to-plane GICP (Segal et al.; Levenberg-Marquardt step), then the keyword "
+          "overrides.")
+      .def(
+          "replace",
+          [](const BatchSettings& s, const py::kwargs& overrides) {
+            return with_batch_overrides(s, overrides, "");
+          },
+          "A copy with the batch keyword overrides applied.")
+      .def("validate", &BatchSettings::validate,
+           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.")
+      .def_property(
+          "cost", [](const BatchSettings& s) { return s.cost; },
+          [](BatchSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); },
+          "Cost of a pair: CostType or its name. register(method=...) replaces it with the "
+          "method's cost. Default CostType.point_to_point.");
+  def_distance(batch, "max_correspondence_distance", &BatchSettings::max_correspondence_distance,
+               "d_max: pairs farther apart are rejected, a Distance (scaled: fraction of the "
+               "largest side of the joint bounding box). Default Distance.scaled(0.05).");
+  batch.def_property(
+      "kernel", [](const BatchSettings& s) { return s.kernel; },
+      [](BatchSettings& s, const py::handle& v) { s.kernel = kernel_from_object(v, "kernel"); },
+      "Robust kernel on each pair's residual: KernelType or its name. Default KernelType.none.");
+  def_distance(batch, "kernel_scale", &BatchSettings::kernel_scale,
+               "Scale of the kernel: the residual size where it starts to down-weight, a "
+               "Distance. Default Distance.scaled(0.01).");
+  batch.def_readwrite("trim_ratio", &BatchSettings::trim_ratio,
+                      "Keep only this fraction of each iteration's pairs, the closest ones "
+                      "(trimmed ICP), in (0, 1]. Default 1.");
+  def_count(batch, "max_iterations", &BatchSettings::max_iterations,
+            "Iteration limit (passes over the source); reaching it means not converged. "
+            "Default 100.");
+  batch
+      .def_readwrite("translation_tolerance", &BatchSettings::translation_tolerance,
+                     "Converged when an iteration moves the translation less than this (scaled "
+                     "units) ... Default 1e-5.")
+      .def_readwrite("rotation_tolerance", &BatchSettings::rotation_tolerance,
+                     "... and the rotation less than this (rotation angle, rad). Default 1e-5.")
+      .def_readwrite("initial_damping", &BatchSettings::initial_damping,
+                     "Initial Levenberg-Marquardt damping, relative to the mean diagonal of "
+                     "J^T J; 0 = plain Gauss-Newton; unused by point-to-point. Default 1e-6.")
+      .def_readwrite("neighborhood", &BatchSettings::neighborhood,
+                     "NeighborhoodSettings for the normals and covariances of the plane costs.");
+  def_count(batch, "evaluation_points", &BatchSettings::evaluation_points,
+            "Source points (strided) for the final inlier statistics; 0 = all. Default 10000.");
+  def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy,
+           "Check the final alignment for degenerate geometry and report it in "
+           "RegistrationResult.constraint_ratio / degenerate. Default True.");
+  def_value_methods(batch);
 }
 
 }  // namespace sgdicp::python

@@ -113,8 +113,32 @@ def test_real_moved_copy_is_registered_exactly():
                 "trim": 0.9,
             },
         ),
+        (["--method", "sgd-plane", "--seed", "3"], {"method": "sgd-plane", "seed": 3}),
+        (
+            ["--method", "sgd-gicp", "--neighbors", "15", "--trim", "0.95"],
+            {"method": "sgd-gicp", "neighbors": 15, "trim": 0.95},
+        ),
+        (["--method", "icp"], {"method": "icp"}),
+        (
+            ["--method", "icp-plane", "-d", "1.0", "--max-distance-unit", "m", "--damping", "0"],
+            {"method": "icp-plane", "max_distance": 1.0, "max_distance_unit": "m", "damping": 0.0},
+        ),
+        (
+            ["--method", "gicp", "--kernel", "cauchy", "--max-iterations", "30"],
+            {"method": "gicp", "kernel": "cauchy", "max_iterations": 30},
+        ),
     ],
-    ids=["seed", "overrides", "paper-adam", "plane-huber-trim"],
+    ids=[
+        "seed",
+        "overrides",
+        "paper-adam",
+        "plane-huber-trim",
+        "method-sgd-plane",
+        "method-sgd-gicp",
+        "method-icp",
+        "method-icp-plane",
+        "method-gicp",
+    ],
 )
 def test_same_result_as_the_cli(car_pair, cli_options, python_options):
     cli = find_cli()
