@@ -231,9 +231,10 @@ struct Method {
 
 Method method_from_object(const py::handle& value) {
   if (!py::isinstance<py::str>(value)) {
-    throw py::type_error("method must be a str ('sgd', 'sgd-plane', 'sgd-gicp', 'icp', "
-                         "'icp-plane' or 'gicp'), got " +
-                         type_name(value));
+    throw py::type_error(
+        "method must be a str ('sgd', 'sgd-plane', 'sgd-gicp', 'icp', "
+        "'icp-plane' or 'gicp'), got " +
+        type_name(value));
   }
   std::string name = value.cast<std::string>();
   std::replace(name.begin(), name.end(), '_', '-');
@@ -308,8 +309,8 @@ Result register_with(const ConvertedCloud& src, const py::handle& reference, Cos
 }
 
 Result register_clouds(const py::handle& source, const py::handle& reference,
-                       const py::handle& init, const py::handle& settings,
-                       const py::handle& method, const py::kwargs& overrides) {
+                       const py::handle& init, const py::handle& settings, const py::handle& method,
+                       const py::kwargs& overrides) {
   const Method m = method_from_object(method);
   if (m.cost && overrides.contains("cost")) {
     throw InvalidSettingsError("method='" + m.name +
@@ -322,10 +323,9 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
     const Eigen::Matrix4d T_init =
         init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
     const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
-    return register_with(src, reference, s.cost, s.neighborhood,
-                         [&](const ReferenceIndex& index) {
-                           return align(src.cloud, index, s, T_init);
-                         });
+    return register_with(src, reference, s.cost, s.neighborhood, [&](const ReferenceIndex& index) {
+      return align(src.cloud, index, s, T_init);
+    });
   }
   BatchSettings base = batch_settings_or_default(settings, m);
   base.cost = *m.cost;
@@ -381,7 +381,8 @@ ReadPoints read_points_with_info(const std::filesystem::path& path, const py::ha
 
 // ---- docstrings
 
-constexpr const char* kRegisterDoc = R"doc(Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
+constexpr const char* kRegisterDoc =
+    R"doc(Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
 Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
 into the reference frame: p_ref = R @ p_src + t.

@@ -51,7 +51,8 @@ Eigen::Vector3f viewpoint_from(const py::handle& value) {
                          static_cast<float>(v.at(2)));
 }
 
-constexpr const char* kVoxelDoc = R"doc(One point per occupied cubic voxel: the centroid of the points in it.
+constexpr const char* kVoxelDoc =
+    R"doc(One point per occupied cubic voxel: the centroid of the points in it.
 
 Parameters
 ----------
@@ -74,7 +75,8 @@ InvalidInputError (ValueError)
     Not an (N, 3) float32/float64 array.
 )doc";
 
-constexpr const char* kRandomDoc = R"doc(`count` distinct points chosen uniformly at random without replacement.
+constexpr const char* kRandomDoc =
+    R"doc(`count` distinct points chosen uniformly at random without replacement.
 
 Parameters
 ----------
@@ -120,7 +122,8 @@ InvalidSettingsError (ValueError)
     k or num_threads out of range.
 )doc";
 
-constexpr const char* kCovariancesDoc = R"doc(Local covariances from the k nearest neighbours of every point.
+constexpr const char* kCovariancesDoc =
+    R"doc(Local covariances from the k nearest neighbours of every point.
 
 Raw covariance: (1/n) sum (q - mean)(q - mean)^T over the n = min(k, N) neighbours, in m^2.
 With regularize=True (the default, as GICP uses them) each is replaced by the unitless plane
@@ -200,7 +203,8 @@ void bind_preprocessing(py::module_& m) {
         return array_from_cloud(std::move(normals));
       },
       kNormalsDoc, "points"_a, "k"_a = NeighborhoodSettings{}.k,
-      "num_threads"_a = NeighborhoodSettings{}.num_threads, py::kw_only(), "viewpoint"_a = py::none());
+      "num_threads"_a = NeighborhoodSettings{}.num_threads, py::kw_only(),
+      "viewpoint"_a = py::none());
 
   m.def(
       "estimate_covariances",

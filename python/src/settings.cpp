@@ -272,10 +272,8 @@ constexpr std::array kBatchKeywords{
                  }},
     BatchKeyword{"trim", [](BatchSettings& s, const py::handle& v,
                             Distance::Unit) { s.trim_ratio = as_real(v, "trim"); }},
-    BatchKeyword{"neighbors",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.neighborhood.k = as_count(v, "neighbors");
-                 }},
+    BatchKeyword{"neighbors", [](BatchSettings& s, const py::handle& v,
+                                 Distance::Unit) { s.neighborhood.k = as_count(v, "neighbors"); }},
     BatchKeyword{"damping", [](BatchSettings& s, const py::handle& v,
                                Distance::Unit) { s.initial_damping = as_real(v, "damping"); }},
     BatchKeyword{"translation_tolerance",
@@ -571,9 +569,9 @@ BatchSettings with_batch_overrides(BatchSettings s, const py::dict& overrides,
       const bool sgd_only = std::any_of(kKeywords.begin(), kKeywords.end(),
                                         [&](const Keyword& k) { return k.name == name; }) ||
                             name == "optimizer";
-      std::string message =
-          sgd_only ? "setting '" + name + "' applies to the SGD methods only, not to "
-                   : "unknown setting '" + name + "' for ";
+      std::string message = sgd_only
+                                ? "setting '" + name + "' applies to the SGD methods only, not to "
+                                : "unknown setting '" + name + "' for ";
       message += method.empty() ? std::string("BatchSettings")
                                 : "the batch method '" + std::string(method) + "'";
       throw py::type_error(message + "; the batch keyword settings are: " + batch_keyword_list());
