@@ -233,7 +233,7 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
       ->check(CLI::IsMember({"corner", "center"}));
   app.add_option(
       "--evaluation-points", o.evaluation_points,
-      "Source points (evenly strided) used for the final inlier ratio and RMSE, 0 = all" +
+      "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all" +
           both(std::to_string(d.evaluation_points), std::to_string(p.evaluation_points)));
 }
 

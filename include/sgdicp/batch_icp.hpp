@@ -43,7 +43,7 @@ struct BatchSettings {
   double initial_damping = 1e-6;
   /// Neighbourhoods for the normals / covariances of the plane costs (estimated when missing).
   NeighborhoodSettings neighborhood{};
-  std::size_t evaluation_points = 10000;  ///< see SgdSettings
+  std::size_t evaluation_points = 2000;  ///< see SgdSettings
   bool check_degeneracy = true;           ///< see SgdSettings
 
   static BatchSettings icp();        ///< point-to-point

@@ -22,7 +22,7 @@ namespace sgdicp {
 
 struct EvaluationSettings {
   /// Source points to evaluate (spread by a golden-ratio sequence); 0 = all.
-  std::size_t evaluation_points = 10000;
+  std::size_t evaluation_points = 2000;
   /// Whether to compute constraint_ratio / degenerate.
   bool check_degeneracy = true;
   /// Ratio below which the geometry is reported degenerate (unitless). Measured: 0.08-0.23 on

@@ -84,7 +84,7 @@ struct SgdSettings {
   /// last iterate.
   bool average_iterates = true;
   /// Source points used for the final inlier statistics (0 = all).
-  std::size_t evaluation_points = 10000;
+  std::size_t evaluation_points = 2000;
   /// Record a per-iteration trace in the result.
   bool record_trace = false;
   /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report

@@ -1,7 +1,9 @@
 #pragma once
 // Mini-batch sampling without replacement (paper Section III-B, Algorithm 1 line 2): source
 // indices are drawn from a shuffled order; when every point has been used, the order is
-// reshuffled and a new epoch starts. A batch may straddle two epochs. Seeded and reproducible:
+// reshuffled and a new epoch starts. A batch may straddle two epochs. The shuffle is lazy
+// (Fisher-Yates one draw at a time): a registration that stops after a fraction of a pass pays
+// only for the indices it draws, not for shuffling the whole cloud. Seeded and reproducible:
 // the shuffle and the bounded draws are our own, so the sequence does not depend on the standard
 // library's distribution implementations.
 #include <cstdint>
@@ -18,7 +20,6 @@ class EpochSampler {
   EpochSampler(std::uint32_t num_points, std::uint64_t seed) : order_(num_points), rng_(seed) {
     if (num_points == 0) throw InvalidInputError("cannot sample from an empty cloud");
     std::iota(order_.begin(), order_.end(), 0U);
-    shuffle();
   }
 
   /// Fills batch with the next batch_size indices (cleared first).
@@ -26,10 +27,12 @@ class EpochSampler {
     batch.clear();
     for (std::size_t i = 0; i < batch_size; ++i) {
       if (cursor_ == order_.size()) {
-        shuffle();
-        cursor_ = 0;
+        cursor_ = 0;  // the next epoch shuffles the current order again, draw by draw
         ++epoch_;
       }
+      // One Fisher-Yates step: a uniform pick among the indices not drawn in this epoch.
+      const std::size_t pick = cursor_ + bounded(order_.size() - cursor_);
+      std::swap(order_[cursor_], order_[pick]);
       batch.push_back(order_[cursor_++]);
     }
   }
@@ -45,13 +48,6 @@ class EpochSampler {
     while (x >= limit) x = rng_();
     return x % bound;
   }
-  // Fisher-Yates.
-  void shuffle() {
-    for (std::size_t i = order_.size(); i > 1; --i) {
-      std::swap(order_[i - 1], order_[bounded(i)]);
-    }
-  }
-
   std::vector<std::uint32_t> order_;
   std::mt19937_64 rng_;
   std::size_t cursor_ = 0;

@@ -287,7 +287,7 @@ class Settings:
     average_iterates: bool
     """Return the mean of the final stage's iterates instead of the last one. Default True."""
     evaluation_points: int
-    """Source points (strided) for the final inlier statistics; 0 = all. Default 10000."""
+    """Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000."""
     record_trace: bool
     """Fill RegistrationResult.trace. Default False."""
     check_degeneracy: bool
@@ -457,7 +457,7 @@ class BatchSettings:
     neighborhood: NeighborhoodSettings
     """Neighbourhoods for the normals and covariances of the plane costs."""
     evaluation_points: int
-    """Source points (strided) for the final inlier statistics; 0 = all. Default 10000."""
+    """Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000."""
     check_degeneracy: bool
     """Check the final alignment for degenerate geometry and report it in
     RegistrationResult.constraint_ratio / degenerate. Default True."""
@@ -772,7 +772,7 @@ def register(
         neighbors: neighbours per point for normals and covariances, [3, 1000]. Default 20.
         check_degeneracy: report degenerate geometry in result.constraint_ratio / degenerate.
             Default True.
-        evaluation_points: source points for the final inlier statistics, 0 = all. Default 10000.
+        evaluation_points: source points for the final inlier statistics, 0 = all. Default 2000.
         record_trace: fill result.trace. Default False.
 
     Raises:
