@@ -139,7 +139,7 @@ BATCH_DEFAULTS = {
     "translation_tolerance": 1e-5,
     "rotation_tolerance": 1e-5,
     "initial_damping": 1e-6,
-    "evaluation_points": 10000,
+    "evaluation_points": 2000,
     "check_degeneracy": True,
 }
 

@@ -282,7 +282,7 @@ def test_result_has_every_field(scene):
     assert r.converged is True and r.stop_reason == "converged" and r.message
     assert r.iterations > 0 and r.points_processed == r.iterations * 160
     assert r.stages == 4  # the coarse phase and 3 refinement stages
-    assert r.evaluated_points == 10000 and 0 < r.inliers <= r.evaluated_points
+    assert r.evaluated_points == 2000 and 0 < r.inliers <= r.evaluated_points
     assert r.inlier_ratio == pytest.approx(r.inliers / r.evaluated_points)
     assert 0 < r.inlier_rmse_m < 0.03
     assert 0 < r.final_max_distance_m < 0.5 * r.scale_m

@@ -52,7 +52,7 @@ DEFAULTS = {
     "average_iterates": True,
     "max_iterations": 4000,
     "seed": 2019,
-    "evaluation_points": 10000,
+    "evaluation_points": 2000,
     "record_trace": False,
     "check_degeneracy": True,
 }
