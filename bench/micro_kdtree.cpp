@@ -60,8 +60,8 @@ void nearest(benchmark::State& state, const sgdicp::bench::Dataset& ds, double d
   auto& index = indices[ds.name];
   if (!index) index = std::make_unique<ReferenceIndex>(sgdicp::bench::cloud(ds.reference));
   const auto queries = queries_near(*index, 0.005);
-  const float bound = d_max_m > 0 ? static_cast<float>(d_max_m * d_max_m)
-                                  : std::numeric_limits<float>::max();
+  const float bound =
+      d_max_m > 0 ? static_cast<float>(d_max_m * d_max_m) : std::numeric_limits<float>::max();
   std::size_t i = 0, found = 0;
   for (auto _ : state) {
     const auto nn = index->nearest(queries[i++ & 4095U], bound);
@@ -74,7 +74,9 @@ void nearest(benchmark::State& state, const sgdicp::bench::Dataset& ds, double d
 }
 
 // The fastest repetition: on a shared, noisy machine the best estimate of the intrinsic cost.
-double min_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); }
+double min_of(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+}
 
 }  // namespace
 

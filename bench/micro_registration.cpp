@@ -3,7 +3,8 @@
 //                           index prebuilt): per iteration = (t(100) - t(10)) / 90; t(1) is the
 //                           fixed cost (input checks, bounding box, final inlier statistics).
 //   register/DATASET        one full registration with the default settings from identity:
-//                           KD-tree build + align(), as `sgdicp bench` times it (file I/O excluded).
+//                           KD-tree build + align(), as `sgdicp bench` times it (file I/O
+//                           excluded).
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -77,7 +78,9 @@ void register_pair(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
 }
 
 // The fastest repetition: on a shared, noisy machine the best estimate of the intrinsic cost.
-double min_of(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end()); }
+double min_of(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+}
 
 }  // namespace
 

@@ -93,14 +93,8 @@ void append_little_endian(std::string& out, T value) {
   out.append(raw.data(), raw.size());
 }
 
-// double -> float without the undefined behaviour of converting an out-of-range value:
-// what would round beyond FLT_MAX becomes infinite (and is then dropped as non-finite).
 float to_float(double value) {
-  constexpr double kRoundsToInfinity = 0x1.ffffffp127;  // halfway between FLT_MAX and 2^128
-  if (std::isnan(value)) return std::numeric_limits<float>::quiet_NaN();
-  if (value >= kRoundsToInfinity) return std::numeric_limits<float>::infinity();
-  if (value <= -kRoundsToInfinity) return -std::numeric_limits<float>::infinity();
-  return static_cast<float>(value);
+  return to_float_saturating(value);
 }
 
 // ---------------------------------------------------------------------------------------------

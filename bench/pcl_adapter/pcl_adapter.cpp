@@ -63,8 +63,9 @@ template <class Reg>
 void configure(Reg& reg, double max_distance, int max_iterations) {
   reg.setMaxCorrespondenceDistance(max_distance);
   reg.setMaximumIterations(max_iterations);
-  reg.setTransformationEpsilon(1e-3 * 1e-3);                       // squared translation, m^2
-  reg.setTransformationRotationEpsilon(std::cos(0.1 * std::numbers::pi / 180));  // cosine of the angle
+  reg.setTransformationEpsilon(1e-3 * 1e-3);  // squared translation, m^2
+  reg.setTransformationRotationEpsilon(
+      std::cos(0.1 * std::numbers::pi / 180));  // cosine of the angle
 }
 
 struct Outcome {
@@ -139,17 +140,19 @@ int main() {
         double max_distance = 0;
         int max_iterations = 0;
         in >> method >> src >> ref >> max_distance >> max_iterations;
-        if (!in || !clouds.count(src) || !clouds.count(ref)) throw std::runtime_error("bad run line");
+        if (!in || !clouds.count(src) || !clouds.count(ref))
+          throw std::runtime_error("bad run line");
         const auto wall0 = std::chrono::steady_clock::now();
         const std::clock_t cpu0 = std::clock();
         const Outcome o = run(method, clouds[src], clouds[ref], max_distance, max_iterations);
         const double cpu_ms = 1e3 * static_cast<double>(std::clock() - cpu0) / CLOCKS_PER_SEC;
         const double wall_ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0).count();
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall0)
+                .count();
         std::ostringstream out;
         out.precision(17);
-        out << "ok " << wall_ms << ' ' << cpu_ms << ' ' << o.iterations << ' ' << (o.converged ? 1 : 0)
-            << ' ' << o.fitness;
+        out << "ok " << wall_ms << ' ' << cpu_ms << ' ' << o.iterations << ' '
+            << (o.converged ? 1 : 0) << ' ' << o.fitness;
         for (int r = 0; r < 4; ++r)
           for (int c = 0; c < 4; ++c) out << ' ' << o.T(r, c);
         std::cout << out.str() << std::endl;
@@ -158,7 +161,8 @@ int main() {
       }
     } catch (const std::exception& e) {
       std::string msg = e.what();
-      for (char& c : msg) if (c == '\n') c = ' ';
+      for (char& c : msg)
+        if (c == '\n') c = ' ';
       std::cout << "err " << msg << std::endl;
     }
   }

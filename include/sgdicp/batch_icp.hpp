@@ -44,7 +44,7 @@ struct BatchSettings {
   /// Neighbourhoods for the normals / covariances of the plane costs (estimated when missing).
   NeighborhoodSettings neighborhood{};
   std::size_t evaluation_points = 2000;  ///< see SgdSettings
-  bool check_degeneracy = true;           ///< see SgdSettings
+  bool check_degeneracy = true;          ///< see SgdSettings
 
   static BatchSettings icp();        ///< point-to-point
   static BatchSettings icp_plane();  ///< point-to-plane

@@ -1,5 +1,6 @@
 #pragma once
 // The point cloud type used throughout: metric x y z, single precision (as sensors deliver it).
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <vector>
@@ -26,6 +27,17 @@ struct PointCloud {
   [[nodiscard]] std::size_t size() const noexcept { return points.size(); }
   [[nodiscard]] bool empty() const noexcept { return points.empty(); }
 };
+
+/// double -> float without the undefined behaviour of converting an out-of-range value: what
+/// would round beyond FLT_MAX becomes infinite (and is then dropped or rejected as non-finite).
+/// Used by the file readers and the Python bindings alike.
+[[nodiscard]] inline float to_float_saturating(double value) {
+  constexpr double kRoundsToInfinity = 0x1.ffffffp127;  // halfway between FLT_MAX and 2^128
+  if (std::isnan(value)) return std::numeric_limits<float>::quiet_NaN();
+  if (value >= kRoundsToInfinity) return std::numeric_limits<float>::infinity();
+  if (value <= -kRoundsToInfinity) return -std::numeric_limits<float>::infinity();
+  return static_cast<float>(value);
+}
 
 /// Axis-aligned bounding box of a cloud. Undefined (min > max) for an empty cloud.
 struct BoundingBox {

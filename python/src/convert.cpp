@@ -13,14 +13,9 @@
 namespace sgdicp::python {
 namespace {
 
-// double -> float as the file readers do it (src/io.cpp): what would round beyond FLT_MAX becomes
-// infinite, without the undefined behaviour of an out-of-range conversion.
+// double -> float as the file readers do it (sgdicp::to_float_saturating).
 float to_float(double value) {
-  constexpr double kRoundsToInfinity = 0x1.ffffffp127;  // halfway between FLT_MAX and 2^128
-  if (std::isnan(value)) return std::numeric_limits<float>::quiet_NaN();
-  if (value >= kRoundsToInfinity) return std::numeric_limits<float>::infinity();
-  if (value <= -kRoundsToInfinity) return -std::numeric_limits<float>::infinity();
-  return static_cast<float>(value);
+  return sgdicp::to_float_saturating(value);
 }
 float to_float(float value) {
   return value;

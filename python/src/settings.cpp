@@ -843,8 +843,9 @@ void bind_settings(py::module_& m) {
             "2019.");
   def_flag(settings, "average_iterates", &SgdSettings::average_iterates,
            "Return the mean of the final stage's iterates instead of the last one. Default True.");
-  def_count(settings, "evaluation_points", &SgdSettings::evaluation_points,
-            "Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000.");
+  def_count(
+      settings, "evaluation_points", &SgdSettings::evaluation_points,
+      "Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000.");
   def_flag(settings, "record_trace", &SgdSettings::record_trace,
            "Fill RegistrationResult.trace. Default False.");
   def_flag(settings, "check_degeneracy", &SgdSettings::check_degeneracy,
@@ -927,8 +928,9 @@ void bind_settings(py::module_& m) {
                      "J^T J; 0 = plain Gauss-Newton; unused by point-to-point. Default 1e-6.")
       .def_readwrite("neighborhood", &BatchSettings::neighborhood,
                      "NeighborhoodSettings for the normals and covariances of the plane costs.");
-  def_count(batch, "evaluation_points", &BatchSettings::evaluation_points,
-            "Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000.");
+  def_count(
+      batch, "evaluation_points", &BatchSettings::evaluation_points,
+      "Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000.");
   def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy,
            "Check the final alignment for degenerate geometry and report it in "
            "RegistrationResult.constraint_ratio / degenerate. Default True.");
