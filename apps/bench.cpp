@@ -136,10 +136,19 @@ std::vector<std::string> split_commas(const std::string& text) {
   return out;
 }
 
-void print_summary(const std::string& label, const std::vector<const Row*>& rows,
-                   const std::vector<Threshold>& thresholds) {
-  std::vector<double> te, rs, rg, tm, pts, its;
+// The statistics of a group of registrations, shared by the summary and the comparison table.
+struct Summary {
+  Stats t_err, r_err_sum, r_err_geo, time, points, iterations;
+  std::size_t n = 0;
   std::size_t converged = 0;
+  std::vector<std::size_t> successes;  // per threshold
+};
+
+Summary summarize(const std::vector<const Row*>& rows, const std::vector<Threshold>& thresholds) {
+  std::vector<double> te, rs, rg, tm, pts, its;
+  Summary s;
+  s.n = rows.size();
+  s.successes.assign(thresholds.size(), 0);
   for (const Row* r : rows) {
     te.push_back(r->t_err);
     rs.push_back(r->r_err_sum);
@@ -147,28 +156,46 @@ void print_summary(const std::string& label, const std::vector<const Row*>& rows
     tm.push_back(r->build_ms + r->align_ms);
     pts.push_back(static_cast<double>(r->points));
     its.push_back(static_cast<double>(r->iterations));
-    converged += r->converged ? 1 : 0;
-  }
-  const auto line = [](const char* what, const Stats& s, const char* unit) {
-    std::printf("  %-28s median %-10s mean %s +- %s %s\n", what, fmt(s.median).c_str(),
-                fmt(s.mean).c_str(), fmt(s.std).c_str(), unit);
-  };
-  std::printf("\nsummary over %zu registrations (%s)\n", rows.size(), label.c_str());
-  line("translation error", stats_of(te), "m");
-  line("rotation error (sum |d rpy|)", stats_of(rs), "rad");
-  line("rotation error (geodesic)", stats_of(rg), "deg");
-  line("time (prepare + register)", stats_of(tm), "ms, file I/O excluded");
-  line("points processed", stats_of(pts), "");
-  line("iterations", stats_of(its), "");
-  std::printf("  converged: %zu/%zu\n", converged, rows.size());
-  for (const auto& th : thresholds) {
-    std::size_t ok = 0;
-    for (const Row* r : rows) {
-      ok += (r->t_err < th.translation_m && r->r_err_geo_deg < th.rotation_deg) ? 1 : 0;
+    s.converged += r->converged ? 1 : 0;
+    for (std::size_t t = 0; t < thresholds.size(); ++t) {
+      s.successes[t] +=
+          (r->t_err < thresholds[t].translation_m && r->r_err_geo_deg < thresholds[t].rotation_deg)
+              ? 1
+              : 0;
     }
+  }
+  s.t_err = stats_of(te);
+  s.r_err_sum = stats_of(rs);
+  s.r_err_geo = stats_of(rg);
+  s.time = stats_of(tm);
+  s.points = stats_of(pts);
+  s.iterations = stats_of(its);
+  return s;
+}
+
+std::string percent(std::size_t k, std::size_t n) {
+  return fmt(n ? 100.0 * static_cast<double>(k) / static_cast<double>(n) : 0.0, 3);
+}
+
+void print_summary(const std::string& label, const std::vector<const Row*>& rows,
+                   const std::vector<Threshold>& thresholds) {
+  const Summary s = summarize(rows, thresholds);
+  const auto line = [](const char* what, const Stats& st, const char* unit) {
+    std::printf("  %-28s median %-10s mean %s +- %s %s\n", what, fmt(st.median).c_str(),
+                fmt(st.mean).c_str(), fmt(st.std).c_str(), unit);
+  };
+  std::printf("\nsummary over %zu registrations (%s)\n", s.n, label.c_str());
+  line("translation error", s.t_err, "m");
+  line("rotation error (sum |d rpy|)", s.r_err_sum, "rad");
+  line("rotation error (geodesic)", s.r_err_geo, "deg");
+  line("time (prepare + register)", s.time, "ms, file I/O excluded");
+  line("points processed", s.points, "");
+  line("iterations", s.iterations, "");
+  std::printf("  converged: %zu/%zu\n", s.converged, s.n);
+  for (std::size_t t = 0; t < thresholds.size(); ++t) {
     std::printf("  success (t_err < %s m and r_geo < %s deg): %zu/%zu = %s %%\n",
-                fmt(th.translation_m).c_str(), fmt(th.rotation_deg).c_str(), ok, rows.size(),
-                fmt(100.0 * static_cast<double>(ok) / static_cast<double>(rows.size()), 3).c_str());
+                fmt(thresholds[t].translation_m).c_str(), fmt(thresholds[t].rotation_deg).c_str(),
+                s.successes[t], s.n, percent(s.successes[t], s.n).c_str());
   }
 }
 
@@ -183,34 +210,16 @@ void print_comparison(const std::vector<std::string>& methods, const std::vector
   }
   std::printf("\n");
   for (const auto& m : methods) {
-    std::vector<double> te, rg, tm, pts, its;
-    std::size_t converged = 0;
-    std::vector<std::size_t> ok(thresholds.size(), 0);
+    std::vector<const Row*> mine;
     for (const auto& r : rows) {
-      if (r.method != m) continue;
-      te.push_back(r.t_err);
-      rg.push_back(r.r_err_geo_deg);
-      tm.push_back(r.build_ms + r.align_ms);
-      pts.push_back(static_cast<double>(r.points));
-      its.push_back(static_cast<double>(r.iterations));
-      converged += r.converged ? 1 : 0;
-      for (std::size_t t = 0; t < thresholds.size(); ++t) {
-        ok[t] +=
-            (r.t_err < thresholds[t].translation_m && r.r_err_geo_deg < thresholds[t].rotation_deg)
-                ? 1
-                : 0;
-      }
+      if (r.method == m) mine.push_back(&r);
     }
-    const std::size_t n = te.size();
-    std::printf("%-10s %5zu %12s %12s %12s %10s %10s %5zu", m.c_str(), n,
-                fmt(stats_of(te).median).c_str(), fmt(stats_of(rg).median).c_str(),
-                fmt(stats_of(tm).median).c_str(), fmt(stats_of(pts).median).c_str(),
-                fmt(stats_of(its).median).c_str(), converged);
-    for (const std::size_t k : ok) {
-      std::printf(
-          " %13s%%",
-          fmt(n ? 100.0 * static_cast<double>(k) / static_cast<double>(n) : 0.0, 3).c_str());
-    }
+    const Summary s = summarize(mine, thresholds);
+    std::printf("%-10s %5zu %12s %12s %12s %10s %10s %5zu", m.c_str(), s.n,
+                fmt(s.t_err.median).c_str(), fmt(s.r_err_geo.median).c_str(),
+                fmt(s.time.median).c_str(), fmt(s.points.median).c_str(),
+                fmt(s.iterations.median).c_str(), s.converged);
+    for (const std::size_t k : s.successes) std::printf(" %13s%%", percent(k, s.n).c_str());
     std::printf("\n");
   }
 }
@@ -356,8 +365,8 @@ void add_bench_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "bench",
       "Register every pair of one or more pairs files (format: shared/data/PAIRS.md) and print "
-      "per-pair errors and times and a summary. Time = kd-tree build + registration; file I/O "
-      "is excluded.");
+      "per-pair errors and times and a summary. Time = preparation (kd-tree build, normals/"
+      "covariances, downsampling) + registration; file I/O is excluded.");
   cmd->add_option("PAIRS_FILE", o->pairs_files, "Pairs file(s)")->required();
   cmd->add_option("--perturb", o->perturb,
                   "Start each pair from the ground truth composed with a random perturbation of "

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
-#include <sstream>
 
 #include "checks.hpp"
 #include "sgdicp/error.hpp"
