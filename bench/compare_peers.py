@@ -648,7 +648,8 @@ def machine_info() -> str:
     return f"{platform.node()}: {os.cpu_count()} CPUs, {cpu}, {mem} RAM, Python {platform.python_version()}, load average {os.getloadavg()[0]:.2f} at the start"
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
+    """The command line; also the source of the peers' settings for eval/reproduce.py."""
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("pairs", nargs="*", help="pairs files (default: ../shared/data/pairs/*.txt from the repository root)")
     ap.add_argument("--reps", type=int, default=None, help="rounds over all pairs and methods (default 5; --quick: 2)")
@@ -670,13 +671,11 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=10.0, help="PCL runs longer than this (s) are stopped, recorded as 'timeout' and not retried on that pair (default 10)")
     ap.add_argument("--max-pairs", type=int, default=0, help="use at most this many pairs per pairs file (0 = all)")
     ap.add_argument("--no-install", dest="install", action="store_false", help="do not pip install missing peers")
-    args = ap.parse_args(argv)
+    return ap
 
-    if args.quick:
-        args.reps = args.reps or 2
-        args.max_pairs = args.max_pairs or 1
-        args.methods = args.methods or QUICK_METHODS
-    args.reps = args.reps or 5
+
+def finish_args(args: argparse.Namespace) -> argparse.Namespace:
+    """Derived settings the runners read: the voxel size per pairs file, an absolute CLI path."""
     voxel = dict(DEFAULT_VOXEL)
     for v in args.voxel:
         k, _, val = v.partition("=")
@@ -684,6 +683,70 @@ def main(argv=None) -> int:
     args.voxel_for = lambda stem: voxel.get(stem, 0.25)
     if not os.path.isabs(args.sgdicp):
         args.sgdicp = os.path.abspath(args.sgdicp)
+    return args
+
+
+def prepare(ctx: Context, pairs: list[Pair], active: list[Method]) -> list[Pair]:
+    """Reads the clouds of `pairs` (cached), starts the PCL adapter if a PCL method is active and
+    runs every native method once on the smallest pair (untimed warm-up). Returns the pairs whose
+    clouds could be read."""
+    log(f"[setup] reading {len({p.source for p in pairs} | {p.reference for p in pairs})} clouds (cached in bench/.cache/clouds)")
+    for p in pairs:
+        for path in (p.source, p.reference):
+            if path not in ctx.clouds:
+                try:
+                    ctx.clouds[path] = cached_cloud(path)
+                    ctx.f64[path] = ctx.clouds[path][0].astype(np.float64)
+                except Exception as e:  # noqa: BLE001
+                    log(f"[setup] cannot read {path}: {e}")
+    pairs = [p for p in pairs if p.source in ctx.clouds and p.reference in ctx.clouds]
+    if any(m.family == "pcl" for m in active) and ctx.pcl is None:
+        ctx.pcl = PclAdapter(find_pcl_adapter(ctx.args.pcl_adapter), ctx.args.timeout)
+
+    # Warm-up (untimed): first use of each library in this process on the smallest pair.
+    smallest = min(pairs, key=lambda p: len(ctx.clouds[p.source][0]))
+    for m in active:
+        if m.needs_native:
+            try:
+                m.run(smallest, 0, ctx)
+            except Exception as e:  # noqa: BLE001
+                log(f"[warm-up] {m.name}: {e}")
+    return pairs
+
+
+def run_once(m: Method, p: Pair, rep: int, ctx: Context) -> tuple[Outcome, float, float]:
+    """One registration of pair `p` by method `m`: its outcome (status "timeout", "error" or
+    "non-finite" instead of an exception) and the translation [m] and geodesic rotation [deg]
+    errors against the ground truth (nan when there is no result)."""
+    try:
+        o = m.run(p, rep, ctx)
+    except PeerTimeout as e:
+        o = Outcome(status="timeout", time_ms=ctx.args.timeout * 1e3, note=str(e))
+    except Exception as e:  # noqa: BLE001
+        o = Outcome(status="error", note=str(e).replace("\n", " ")[:300])
+    t_err = r_err = float("nan")
+    if o.T is not None:
+        t_err = translation_error(o.T, p.T_gt)
+        r_err = rotation_error_deg(o.T, p.T_gt)
+        if not np.all(np.isfinite(o.T)):
+            o.status = "non-finite"
+    elif m.family == "sgd-icp" and o.status == "ok":
+        kv = dict(x.split("=", 1) for x in o.note.split(";"))
+        t_err, r_err = float(kv["t_err"]), float(kv["r_err"])
+        if int(kv["n_src"]) != len(ctx.clouds[p.source][0]):
+            log(f"[warn] {p.label}: sgdicp read {kv['n_src']} source points, compare_peers {len(ctx.clouds[p.source][0])}")
+    return o, t_err, r_err
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+
+    if args.quick:
+        args.reps = args.reps or 2
+        args.max_pairs = args.max_pairs or 1
+        args.methods = args.methods or QUICK_METHODS
+    args.reps = args.reps or 5
+    finish_args(args)
 
     methods = build_methods(args)
     if args.list:
@@ -718,27 +781,7 @@ def main(argv=None) -> int:
 
     ctx = Context(args)
     log(f"[setup] {machine_info()}")
-    log(f"[setup] reading {len({p.source for p in pairs} | {p.reference for p in pairs})} clouds (cached in bench/.cache/clouds)")
-    for p in pairs:
-        for path in (p.source, p.reference):
-            if path not in ctx.clouds:
-                try:
-                    ctx.clouds[path] = cached_cloud(path)
-                    ctx.f64[path] = ctx.clouds[path][0].astype(np.float64)
-                except Exception as e:  # noqa: BLE001
-                    log(f"[setup] cannot read {path}: {e}")
-    pairs = [p for p in pairs if p.source in ctx.clouds and p.reference in ctx.clouds]
-    if any(m.family == "pcl" for m in active):
-        ctx.pcl = PclAdapter(find_pcl_adapter(args.pcl_adapter), args.timeout)
-
-    # Warm-up (untimed): first use of each library in this process on the smallest pair.
-    smallest = min(pairs, key=lambda p: len(ctx.clouds[p.source][0]))
-    for m in active:
-        if m.needs_native:
-            try:
-                m.run(smallest, 0, ctx)
-            except Exception as e:  # noqa: BLE001
-                log(f"[warm-up] {m.name}: {e}")
+    pairs = prepare(ctx, pairs, active)
 
     rows = []
     slow: dict[int, set] = {}  # pair index -> methods slower than --slow-ms in the first round
@@ -761,25 +804,10 @@ def main(argv=None) -> int:
                     continue  # one round of a very slow method is enough
                 if rep >= args.slow_reps and m.name in slow.get(p.index, set()):
                     continue  # a slow method: --slow-reps rounds are enough for its median
-                try:
-                    o = m.run(p, rep, ctx)
-                except PeerTimeout as e:
-                    o = Outcome(status="timeout", time_ms=args.timeout * 1e3, note=str(e))
+                o, t_err, r_err = run_once(m, p, rep, ctx)
+                if o.status == "timeout":
                     slow.setdefault(p.index, set()).add(m.name)
                     timed_out.setdefault(p.index, set()).add(m.name)
-                except Exception as e:  # noqa: BLE001
-                    o = Outcome(status="error", note=str(e).replace("\n", " ")[:300])
-                t_err = r_err = float("nan")
-                if o.T is not None:
-                    t_err = translation_error(o.T, p.T_gt)
-                    r_err = rotation_error_deg(o.T, p.T_gt)
-                    if not np.all(np.isfinite(o.T)):
-                        o.status = "non-finite"
-                elif m.family == "sgd-icp" and o.status == "ok":
-                    kv = dict(x.split("=", 1) for x in o.note.split(";"))
-                    t_err, r_err = float(kv["t_err"]), float(kv["r_err"])
-                    if int(kv["n_src"]) != len(ctx.clouds[p.source][0]):
-                        log(f"[warn] {p.label}: sgdicp read {kv['n_src']} source points, compare_peers {len(ctx.clouds[p.source][0])}")
                 rows.append(dict(pairs_file=p.pairs_file, line=p.line, source=os.path.basename(p.source),
                                  reference=os.path.basename(p.reference), source_points=len(ctx.clouds[p.source][0]),
                                  reference_points=len(ctx.clouds[p.reference][0]), method=m.name, family=m.family,
