@@ -14,13 +14,20 @@ namespace {
 // nanoflann's dataset adaptor over our cloud.
 struct CloudAdaptor {
   const std::vector<Eigen::Vector3f>* points;
+  const BoundingBox* box;
   [[nodiscard]] std::size_t kdtree_get_point_count() const { return points->size(); }
   [[nodiscard]] float kdtree_get_pt(std::size_t i, std::size_t dim) const {
     return (*points)[i][static_cast<Eigen::Index>(dim)];
   }
+  // We keep the box anyway (scaling), so nanoflann need not make its own pass over the cloud.
+  // The corners are coordinates of float points, so the conversion back is exact.
   template <class Box>
-  bool kdtree_get_bbox(Box& /*bb*/) const {
-    return false;
+  bool kdtree_get_bbox(Box& bb) const {
+    for (Eigen::Index d = 0; d < 3; ++d) {
+      bb[static_cast<std::size_t>(d)].low = static_cast<float>(box->min[d]);
+      bb[static_cast<std::size_t>(d)].high = static_cast<float>(box->max[d]);
+    }
+    return true;
   }
 };
 
@@ -67,9 +74,14 @@ struct ReferenceIndex::Impl {
 
   Impl(PointCloud reference, const KdTreeSettings& settings)
       : cloud(std::move(reference)),
-        adaptor{&cloud.points},
-        tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(settings.leaf_size)) {
-    box.extend(cloud);
+        box(bounding_box_of(cloud)),
+        adaptor{&cloud.points, &box},
+        tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(settings.leaf_size)) {}
+
+  static BoundingBox bounding_box_of(const PointCloud& c) {
+    BoundingBox b;
+    b.extend(c);
+    return b;
   }
 };
 
