@@ -221,8 +221,8 @@ inline void add_settings_options(CLI::App& app, SettingsOptions& o) {
                           num(p.refinement.min_distance.value) + " scaled"));
   app.add_option(
       "--average", o.average,
-      "Return the mean of the last --window iterates once the final stage is "
-      "stationary (true) or the last iterate (false)" +
+      "Return the mean of the --window iterates of the final stage's stationary window "
+      "(true) or the last iterate (false)" +
           both(d.average_iterates ? "true" : "false", p.average_iterates ? "true" : "false"));
   app.add_option(
          "--scaling-origin", o.scaling_origin,

@@ -194,10 +194,12 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   ConvergenceMonitor monitor(settings.convergence);
   std::size_t stage = 0;
   std::size_t empty_batches = 0;
-  // Polyak tail average of the final stage, taken once that stage is stationary.
-  bool averaging = false;
-  PoseVector average_sum = PoseVector::Zero();
-  std::size_t average_count = 0;
+  // Sum of the iterates of the current test window: when the final stage's window tests
+  // stationary, its mean is the result (Polyak averaging over iterates that jitter about the
+  // optimum, without spending another window of iterations on them).
+  PoseVector window_sum = PoseVector::Zero();
+  std::size_t window_count = 0;
+  std::optional<PoseVector> averaged;
 
   const auto finish = [&](StopReason reason, std::string message) {
     result.stop_reason = reason;
@@ -279,26 +281,23 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       distances.clear();
     }
 
-    if (averaging) {
-      average_sum += theta;
-      ++average_count;
-      if (average_count >= settings.convergence.window) {
-        finish(StopReason::converged, "converged");
-        stopped = true;
+    window_sum += theta;
+    ++window_count;
+    const bool stationary = monitor.update(gradient, step, inliers);
+    if (window_count == settings.convergence.window || stationary) {
+      // The monitor tests (and restarts) at the same boundaries.
+      if (stationary && stage == settings.refinement.stages && settings.average_iterates) {
+        averaged = window_sum / static_cast<double>(window_count);
       }
-      continue;
+      window_sum.setZero();
+      window_count = 0;
     }
-    if (!monitor.update(gradient, step, inliers)) continue;
+    if (!stationary) continue;
 
-    // The stage is stationary.
     ++result.stages;
     if (stage == settings.refinement.stages) {
-      if (!settings.average_iterates) {
-        finish(StopReason::converged, "converged");
-        stopped = true;
-      } else {
-        averaging = true;
-      }
+      finish(StopReason::converged, "converged");
+      stopped = true;
       continue;
     }
     // Refinement: tighter correspondences, smaller steps.
@@ -315,8 +314,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
                                            std::to_string(settings.max_iterations) +
                                            " before converging");
   }
-  const PoseVector returned =
-      average_count > 0 ? PoseVector(average_sum / static_cast<double>(average_count)) : theta;
+  const PoseVector returned = averaged.value_or(theta);
 
   result.T_reference_source = scaling.to_metric(transform_from_pose(returned));
   result.final_max_distance_m = d_max * k;

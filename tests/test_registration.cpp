@@ -149,6 +149,35 @@ TEST(Synthetic, TraceDescribesEveryIteration) {
   EXPECT_EQ(r.points_processed, r.iterations * s.batch_size);
 }
 
+TEST(Synthetic, ResultIsTheMeanOfTheFinalStationaryWindow) {
+  const PointCloud source = synthetic_scene(13);
+  const PointCloud reference =
+      transformed(synthetic_scene(14), make_transform(0.02, -0.03, 0.1, {0.1, -0.05, 0.02}));
+  SgdSettings s;
+  s.record_trace = true;
+  const RegistrationResult averaged = align(source, reference, s);
+  ASSERT_TRUE(averaged.converged) << averaged.message;
+  // Stages end only at window boundaries and the run stops at the final stage's stationary
+  // window, without a further window of iterations.
+  const std::size_t w = s.convergence.window;
+  EXPECT_EQ(averaged.iterations % w, 0U);
+  EXPECT_EQ(averaged.stages, s.refinement.stages + 1);
+  // The result is the mean of that window's iterates (means of the Euler poses, so compare with
+  // the mean of the metric translations to within the iterates' jitter), not the last iterate.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i = averaged.trace.size() - w; i < averaged.trace.size(); ++i) {
+    mean += averaged.trace[i].T_reference_source.block<3, 1>(0, 3) / static_cast<double>(w);
+  }
+  const Eigen::Vector3d result = averaged.T_reference_source.block<3, 1>(0, 3);
+  const Eigen::Vector3d last = averaged.trace.back().T_reference_source.block<3, 1>(0, 3);
+  EXPECT_LT((result - mean).norm(), 0.1 * (last - mean).norm());
+
+  s.average_iterates = false;
+  const RegistrationResult plain = align(source, reference, s);
+  EXPECT_EQ(plain.iterations, averaged.iterations);  // same seed, same path
+  EXPECT_TRUE(plain.T_reference_source.isApprox(plain.trace.back().T_reference_source, 1e-12));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Status reporting and bad input.
 

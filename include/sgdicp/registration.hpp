@@ -38,9 +38,9 @@ struct Distance {
 /// time a stage is stationary (ConvergenceMonitor), d_max shrinks to `distance_factor` times the
 /// median correspondence distance of the stage's last `window` iterations (never below
 /// `min_distance`; a mini-batch without any pair doubles it again, up to the initial d_max) and
-/// the step size is multiplied by `step_decay`. After `stages` such
-/// stages the run has converged; it then returns the mean of the last stage's iterates after
-/// its first `window` (Polyak averaging), which removes most of the remaining jitter.
+/// the step size is multiplied by `step_decay`. When the last of these `stages` is stationary
+/// the run has converged; it returns the mean of the iterates of that stationary window
+/// (Polyak averaging), which removes most of the remaining jitter.
 struct RefinementSettings {
   std::size_t stages = 3;
   double step_decay = 0.5;
@@ -80,8 +80,8 @@ struct SgdSettings {
   std::size_t max_iterations = 4000;
   /// Seed of the mini-batch sampler; same inputs and seed give the same result.
   std::uint64_t seed = 2019;
-  /// Return the mean of the final stage's iterates (after its first `window`) instead of the
-  /// last iterate.
+  /// Return the mean of the iterates of the final stage's stationary window (the last
+  /// `window` iterations) instead of the last iterate.
   bool average_iterates = true;
   /// Source points used for the final inlier statistics (0 = all).
   std::size_t evaluation_points = 2000;
