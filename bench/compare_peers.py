@@ -825,7 +825,7 @@ def main(argv=None) -> int:
                 if rep == 0 and o.status == "ok" and o.time_ms > args.very_slow_ms:
                     very_slow.setdefault(p.index, set()).add(m.name)
             el = time.time() - t_start
-            log(f"[run] round {rep + 1}/{args.reps} {p.label:34s} {done} runs, {el:.0f} s elapsed")
+            log(f"[run] round {rep + 1}/{args.reps} {p.label:34s} {done}/{total} runs (at most), {el:.0f} s elapsed")
     if ctx.pcl:
         ctx.pcl.close()
     live.close()
