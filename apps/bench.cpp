@@ -2,16 +2,22 @@
 // and prints per-pair errors and times and a summary.
 #include <unistd.h>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <exception>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <sstream>
+#include <thread>
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
@@ -26,6 +32,7 @@ struct BenchOptions {
   std::vector<std::string> pairs_files;
   std::string perturb;
   std::size_t repeat = 1;
+  std::size_t threads = 1;
   std::string csv;
   std::vector<std::string> success = {"0.05,1", "2,5"};
   bool json = false;
@@ -266,81 +273,132 @@ void run(const BenchOptions& o) {
 
   const bool tty = isatty(STDERR_FILENO) != 0;
   const auto t0 = std::chrono::steady_clock::now();
-  const std::size_t total = jobs.size() * o.repeat * methods.size();
-  std::vector<Row> rows;
+  // One task per (pair, repeat, method), in this order: methods alternate within a repeat, so
+  // that machine noise spreads over all of them.
+  const std::size_t per_pair = o.repeat * methods.size();
+  const std::size_t total = jobs.size() * per_pair;
   std::printf("%-4s %-36s %-9s %3s %10s %10s %9s %9s %6s %9s %4s\n", "#",
               "pair (source <- reference)", "method", "rep", "t_err[m]", "r_sum[rad]", "r_geo[deg]",
               "time[ms]", "iters", "points", "conv");
+  // Clouds are read once, on first use, under a lock (the registrations run outside it).
+  std::mutex cache_mutex;
   std::map<std::string, PointCloud> cloud_cache;
   const auto cloud = [&](const std::filesystem::path& path, const char* role) -> const PointCloud& {
     const std::string key = path.lexically_normal().string();
+    const std::lock_guard lock(cache_mutex);
     auto it = cloud_cache.find(key);
     if (it == cloud_cache.end()) it = cloud_cache.emplace(key, load_cloud(key, role, false)).first;
-    return it->second;
+    return it->second;  // std::map nodes never move
   };
-  for (std::size_t j = 0; j < jobs.size(); ++j) {
+  const auto run_task = [&](std::size_t task) {
+    const std::size_t j = task / per_pair;
+    const std::size_t rep = (task % per_pair) / methods.size();
     const auto& [file, pair] = jobs[j];
     const PointCloud& source = cloud(pair.source, "source");
     const PointCloud& reference_cloud = cloud(pair.reference, "reference");
-    for (std::size_t rep = 0; rep < o.repeat; ++rep) {
-      const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
-      const Eigen::Matrix4d T_init = perturbation
-                                         ? perturbed(T_gt, *perturbation, j * 1000003ULL + rep)
-                                         : Eigen::Matrix4d::Identity();
-      // Methods alternate within a repeat, so that machine noise spreads over all of them.
-      for (const MethodSpec& method : methods) {
-        MethodSpec m = method;
-        m.sgd.seed = method.sgd.seed + rep;
-        const MethodRun run = run_method(m, source, reference_cloud, T_init);
-        const RegistrationResult& r = run.result;
-        Row row;
-        row.pairs_file = file;
-        row.line = pair.line;
-        row.source = pair.source.filename().string();
-        row.reference = pair.reference.filename().string();
-        row.method = m.name;
-        row.repeat = rep;
-        row.t_err = translation_error(r.T_reference_source, T_gt);
-        row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
-        row.r_err_geo_deg =
-            rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
-        row.init_t_err = translation_error(T_init, T_gt);
-        row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
-        row.build_ms = run.prepare_ms;
-        row.align_ms = r.time_ms;
-        row.iterations = r.iterations;
-        row.points = r.points_processed;
-        row.source_points = run.source_points;
-        row.converged = r.converged;
-        row.degenerate = r.degenerate;
-        row.stop_reason = std::string(to_string(r.stop_reason));
-        const std::string name = row.source + " <- " + row.reference;
-        std::printf("%-4zu %-36s %-9s %3zu %10s %10s %9s %9s %6zu %9zu %4s\n", j + 1,
-                    name.substr(0, 36).c_str(), m.name.c_str(), rep, fmt(row.t_err).c_str(),
-                    fmt(row.r_err_sum).c_str(), fmt(row.r_err_geo_deg).c_str(),
-                    fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
-                    row.converged ? "yes" : "no");
-        std::fflush(stdout);
-        if (csv) {
-          std::fprintf(
-              csv,
-              "%s,%zu,%s,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s,%d\n",
-              file.c_str(), row.line, pair.source.string().c_str(), pair.reference.string().c_str(),
-              m.name.c_str(), rep, row.t_err, row.r_err_sum, row.r_err_geo_deg, row.init_t_err,
-              row.init_r_geo_deg, row.build_ms, row.align_ms, row.build_ms + row.align_ms,
-              row.iterations, row.points, row.source_points, row.converged ? 1 : 0,
-              row.stop_reason.c_str(), row.degenerate ? 1 : 0);
-        }
-        rows.push_back(std::move(row));
-        const double elapsed =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (elapsed > 3.0 || tty) {
-          std::fprintf(stderr, "[bench] %zu/%zu registrations, %.0f s elapsed\n", rows.size(),
-                       total, elapsed);
-        }
-      }
+    const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
+    const Eigen::Matrix4d T_init = perturbation
+                                       ? perturbed(T_gt, *perturbation, j * 1000003ULL + rep)
+                                       : Eigen::Matrix4d::Identity();
+    MethodSpec m = methods[task % methods.size()];
+    m.sgd.seed += rep;
+    const MethodRun run = run_method(m, source, reference_cloud, T_init);
+    const RegistrationResult& r = run.result;
+    Row row;
+    row.pairs_file = file;
+    row.line = pair.line;
+    row.source = pair.source.filename().string();
+    row.reference = pair.reference.filename().string();
+    row.method = m.name;
+    row.repeat = rep;
+    row.t_err = translation_error(r.T_reference_source, T_gt);
+    row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
+    row.r_err_geo_deg =
+        rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
+    row.init_t_err = translation_error(T_init, T_gt);
+    row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
+    row.build_ms = run.prepare_ms;
+    row.align_ms = r.time_ms;
+    row.iterations = r.iterations;
+    row.points = r.points_processed;
+    row.source_points = run.source_points;
+    row.converged = r.converged;
+    row.degenerate = r.degenerate;
+    row.stop_reason = std::string(to_string(r.stop_reason));
+    return row;
+  };
+  std::vector<Row> rows;
+  rows.reserve(total);
+  const auto emit = [&](Row row, std::size_t task) {
+    const std::size_t j = task / per_pair;
+    const std::string name = row.source + " <- " + row.reference;
+    std::printf("%-4zu %-36s %-9s %3zu %10s %10s %9s %9s %6zu %9zu %4s\n", j + 1,
+                name.substr(0, 36).c_str(), row.method.c_str(), row.repeat, fmt(row.t_err).c_str(),
+                fmt(row.r_err_sum).c_str(), fmt(row.r_err_geo_deg).c_str(),
+                fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
+                row.converged ? "yes" : "no");
+    std::fflush(stdout);
+    if (csv) {
+      const RegistrationPair& pair = jobs[j].second;
+      std::fprintf(
+          csv, "%s,%zu,%s,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s,%d\n",
+          row.pairs_file.c_str(), row.line, pair.source.string().c_str(),
+          pair.reference.string().c_str(), row.method.c_str(), row.repeat, row.t_err, row.r_err_sum,
+          row.r_err_geo_deg, row.init_t_err, row.init_r_geo_deg, row.build_ms, row.align_ms,
+          row.build_ms + row.align_ms, row.iterations, row.points, row.source_points,
+          row.converged ? 1 : 0, row.stop_reason.c_str(), row.degenerate ? 1 : 0);
     }
+    rows.push_back(std::move(row));
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (elapsed > 3.0 || tty) {
+      std::fprintf(stderr, "[bench] %zu/%zu registrations, %.0f s elapsed\n", rows.size(), total,
+                   elapsed);
+    }
+  };
+
+  const std::size_t threads = std::min(o.threads, std::max<std::size_t>(total, 1));
+  if (threads <= 1) {
+    for (std::size_t task = 0; task < total; ++task) emit(run_task(task), task);
+  } else {
+    // Throughput mode: independent registrations on `threads` workers (each builds its own
+    // KD-tree); rows are printed in task order as soon as they and all before them are done.
+    std::vector<std::optional<Row>> done(total);
+    std::exception_ptr failure;
+    std::atomic<std::size_t> next{0};
+    std::mutex done_mutex;
+    std::condition_variable ready;
+    const auto worker = [&] {
+      for (std::size_t task = next++; task < total; task = next++) {
+        std::optional<Row> row;
+        std::exception_ptr error;
+        try {
+          row = run_task(task);
+        } catch (...) {
+          error = std::current_exception();
+        }
+        const std::lock_guard lock(done_mutex);
+        if (error && !failure) failure = error;
+        if (error) next = total;  // stop handing out tasks
+        done[task] = std::move(row);
+        ready.notify_one();
+      }
+    };
+    std::vector<std::jthread> pool;
+    for (std::size_t t = 0; t < threads; ++t) pool.emplace_back(worker);
+    for (std::size_t task = 0; task < total; ++task) {
+      std::unique_lock lock(done_mutex);
+      ready.wait(lock, [&] { return done[task].has_value() || failure; });
+      if (!done[task]) break;
+      Row row = std::move(*done[task]);
+      lock.unlock();
+      emit(std::move(row), task);
+    }
+    pool.clear();  // joins
+    if (failure) std::rethrow_exception(failure);
   }
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   for (const MethodSpec& m : methods) {
     std::vector<const Row*> mine;
@@ -356,6 +414,11 @@ void run(const BenchOptions& o) {
     print_summary(label, mine, thresholds);
   }
   if (methods.size() > 1) print_comparison(method_list, rows, thresholds);
+  std::printf(
+      "\nthroughput: %zu registrations in %s s wall time on %zu thread(s) = %s per second "
+      "(file reading included)\n",
+      rows.size(), fmt(wall_s, 3).c_str(), threads,
+      fmt(static_cast<double>(rows.size()) / wall_s, 3).c_str());
 }
 
 }  // namespace
@@ -375,6 +438,11 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--repeat", o->repeat,
                   "Registrations per pair; repeat r uses seed + r (and its own perturbation) "
                   "[default: 1]");
+  cmd->add_option("--threads", o->threads,
+                  "Registrations run in parallel, each on its own thread with its own KD-tree "
+                  "(throughput; the per-registration times then include contention for cores "
+                  "and memory bandwidth). Rows are still printed in pair order [default: 1]")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{256}));
   cmd->add_option("--csv", o->csv, "Write one CSV row per registration to this file");
   cmd->add_option("--success", o->success,
                   "Success threshold TRANS_M,ROT_DEG (translation error and geodesic rotation "
