@@ -56,7 +56,8 @@ def main(argv):
     loop_q = nearest * share_loop
     if "evaluate" in found:  # measured: evaluate_alignment() (inlier statistics + degeneracy check)
         final = found["evaluate"]
-        final_name = "align(): final statistics, evaluate_alignment() (10k NN queries + degeneracy check)"
+        final_name = (f"align(): final statistics, evaluate_alignment() ({q_eval} NN queries + "
+                      "degeneracy check)")
     else:
         final = nearest * (1 - share_loop)
         final_name = "align(): queries of the final inlier statistics (est.)"
@@ -65,7 +66,7 @@ def main(argv):
         ("KD-tree build (ReferenceIndex constructor)", found.get("build", 0)),
         ("align(): nearest-neighbour queries of the SGD loop (est. by query count)", loop_q),
         (final_name, final),
-        ("align(): everything else (sampler shuffle, input checks, gradients, optimiser, convergence test)",
+        ("align(): everything else (sampler, input checks, gradients, optimiser, convergence test)",
          found.get("align", 0) - loop_q - final),
     ]
     other = total - sum(v for _, v in rows)
