@@ -683,6 +683,16 @@ def main(argv=None) -> int:
         ap.error(f"unknown peer(s) {','.join(unknown)}; choose from {','.join(PEERS.values())}")
     t_start = time.perf_counter()
     exe = find_sgdicp(args.sgdicp)
+    if not exe and not args.sgdicp:
+        # Nothing built yet: the README's setup and build scripts (apt-get dependencies, Release
+        # build into build/), then look again.
+        log("sgdicp CLI not found: running scripts/setup.sh and scripts/build.sh")
+        for script in ("setup.sh", "build.sh"):
+            if subprocess.run([os.path.join(REPO, "scripts", script)], cwd=REPO).returncode != 0:
+                print(f"error: scripts/{script} failed; build sgd-icp (README) or pass --sgdicp PATH",
+                      file=sys.stderr)
+                return 2
+        exe = find_sgdicp(None)
     if not exe:
         print("error: sgdicp CLI not found (build it, or pass --sgdicp PATH)", file=sys.stderr)
         return 2
