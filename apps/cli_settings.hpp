@@ -398,7 +398,9 @@ inline MethodRun run_method(const MethodSpec& m, const PointCloud& source,
     s.record_trace = record_trace;
     run.result = align(src, index, s, T_init);
   } else {
-    run.result = align_batch(src, index, m.batch, T_init);
+    BatchSettings b = m.batch;
+    b.record_trace = record_trace;
+    run.result = align_batch(src, index, b, T_init);
   }
   return run;
 }

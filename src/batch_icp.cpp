@@ -234,6 +234,15 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
       }
     }
     T = delta * T;
+    if (settings.record_trace) {
+      // The mean squared pair distance before this step stands for the SGD trace's mini-batch
+      // cost; a batch step is always a full one (step size 1).
+      double sum_sq = 0.0;
+      for (const auto& p : pairs) sum_sq += p.squared_distance;
+      result.trace.push_back({result.iterations, result.points_processed, orthonormalized(T), 1.0,
+                              d_max, pairs.size(),
+                              sum_sq / static_cast<double>(pairs.size()) / (k * k)});
+    }
     const double moved_t = delta.topRightCorner<3, 1>().norm() / k;
     const double moved_r = Eigen::AngleAxisd(Eigen::Matrix3d(delta.topLeftCorner<3, 3>())).angle();
     if (!T.allFinite()) {

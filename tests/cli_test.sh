@@ -442,6 +442,17 @@ for method in sgd sgd-plane sgd-gicp icp icp-plane gicp; do
     fail "register --method $method (exit $rc): $(head -c 400 "$tmp/err")"
   fi
 done
+# --trace: one CSV row per iteration for SGD and batch methods alike.
+for method in sgd icp gicp; do
+  run register "$MOVED" "$REF" --method "$method" --json --trace "$tmp/trace_$method.csv"
+  iterations=$(sed -n 's/.*"iterations": \([0-9]*\).*/\1/p' "$tmp/out" | head -n 1)
+  rows=$(($(grep -c . "$tmp/trace_$method.csv" 2>/dev/null || echo 1) - 1))
+  if [ "$rc" -eq 0 ] && [ -n "$iterations" ] && [ "$rows" -eq "$iterations" ] && [ "$rows" -gt 0 ]; then
+    pass "register --method $method --trace writes one row per iteration ($rows)"
+  else
+    fail "register --method $method --trace (exit $rc): $rows rows for '${iterations}' iterations"
+  fi
+done
 expect_ok "register with a kernel, trimming and downsampling" register "$MOVED" "$REF" \
   --kernel cauchy --trim 0.8 --voxel-size 0.02
 expect_ok "register with the Gauss-Newton preconditioner" register "$MOVED" "$REF" \

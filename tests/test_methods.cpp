@@ -47,6 +47,7 @@ const std::vector<Method>& all_methods() {
 struct Options {
   KernelType kernel = KernelType::none;
   double trim = 1.0;
+  bool trace = false;
 };
 
 RegistrationResult run(const Method& m, const PointCloud& source, const PointCloud& reference,
@@ -58,12 +59,14 @@ RegistrationResult run(const Method& m, const PointCloud& source, const PointClo
     s.cost = m.cost;
     s.kernel = o.kernel;
     s.trim_ratio = o.trim;
+    s.record_trace = o.trace;
     return align(source, index, s);
   }
   BatchSettings b;
   b.cost = m.cost;
   b.kernel = o.kernel;
   b.trim_ratio = o.trim;
+  b.record_trace = o.trace;
   return align_batch(source, index, b);
 }
 
@@ -85,6 +88,33 @@ TEST_P(EveryMethod, RecoversASyntheticTransform) {
   EXPECT_FALSE(r.degenerate) << r.constraint_ratio;
   EXPECT_LT(translation_error(r.T_reference_source, T_gt), 0.01);
   EXPECT_LT(rotation_error_geodesic(r.T_reference_source, T_gt), 0.3 * kDeg);
+}
+
+// Every method records one trace entry per iteration when asked; a batch method's last entry is
+// its result, and its cost (mean squared pair distance) falls as it converges.
+TEST_P(EveryMethod, TraceDescribesEveryIteration) {
+  const Method& m = GetParam();
+  const Eigen::Matrix4d T_gt = make_transform(0, 0, 8 * kDeg, {0.1, -0.05, 0.02});
+  const PointCloud source = synthetic_scene(43);
+  const PointCloud reference = transformed(synthetic_scene(44), T_gt);
+  const RegistrationResult r = run(m, source, reference, Options{.trace = true});
+  ASSERT_TRUE(r.converged) << r.message;
+  ASSERT_EQ(r.trace.size(), r.iterations);
+  for (std::size_t i = 0; i < r.trace.size(); ++i) {
+    EXPECT_EQ(r.trace[i].iteration, i + 1);
+    EXPECT_GT(r.trace[i].inliers, 0U);
+    EXPECT_GT(r.trace[i].step_size, 0.0);
+    EXPECT_GT(r.trace[i].max_distance_m, 0.0);
+    EXPECT_TRUE(r.trace[i].T_reference_source.allFinite());
+  }
+  EXPECT_EQ(r.trace.back().points_processed, r.points_processed);
+  if (!m.stochastic) {
+    EXPECT_TRUE(r.trace.back().T_reference_source.isApprox(r.T_reference_source, 1e-12));
+    EXPECT_EQ(r.trace.front().points_processed, source.size());
+    EXPECT_LT(r.trace.back().cost, 0.5 * r.trace.front().cost);
+  }
+  // Without the option there is no trace.
+  EXPECT_TRUE(run(m, source, reference).trace.empty());
 }
 
 // The libpointmatcher car pair (CSV encoding), 14 deg apart. Its ground truth is good to about

@@ -45,6 +45,10 @@ struct BatchSettings {
   NeighborhoodSettings neighborhood{};
   std::size_t evaluation_points = 2000;  ///< see SgdSettings
   bool check_degeneracy = true;          ///< see SgdSettings
+  /// Record a per-iteration trace in the result: the pose after each iteration, every source
+  /// point processed per iteration, step size 1, d_max, the pairs kept and, as the cost, their
+  /// mean squared distance before the step (scaled units^2).
+  bool record_trace = false;
 
   static BatchSettings icp();        ///< point-to-point
   static BatchSettings icp_plane();  ///< point-to-plane

@@ -22,10 +22,10 @@ struct TraceEntry {
   std::size_t iteration = 0;
   std::size_t points_processed = 0;    ///< source points drawn so far
   Eigen::Matrix4d T_reference_source;  ///< metric pose after this iteration
-  double step_size = 0.0;              ///< effective learning rate of this iteration
+  double step_size = 0.0;              ///< effective learning rate of this iteration (batch: 1)
   double max_distance_m = 0.0;         ///< d_max used, metres
   std::size_t inliers = 0;             ///< pairs kept in this mini-batch
-  double cost = 0.0;                   ///< mini-batch cost F, scaled units^2
+  double cost = 0.0;  ///< mini-batch cost F (batch: mean squared pair distance), scaled units^2
 };
 
 struct RegistrationResult {

@@ -461,6 +461,9 @@ class BatchSettings:
     check_degeneracy: bool
     """Check the final alignment for degenerate geometry and report it in
     RegistrationResult.constraint_ratio / degenerate. Default True."""
+    record_trace: bool
+    """Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, pairs,
+    mean squared pair distance). Default False."""
 
     def __init__(
         self,
@@ -477,6 +480,7 @@ class BatchSettings:
         rotation_tolerance: float = ...,
         evaluation_points: int = ...,
         check_degeneracy: bool = ...,
+        record_trace: bool = ...,
         cost: _CostName = ...,
     ) -> None:
         """The default settings (point-to-point ICP) with the batch keyword overrides applied
@@ -725,8 +729,8 @@ def register(
         The batch methods take only max_distance (default 0.05 scaled), max_distance_unit,
         max_iterations (100), kernel, kernel_scale, trim, neighbors, damping (the initial
         Levenberg-Marquardt damping, default 1e-6), translation_tolerance (1e-5 scaled units),
-        rotation_tolerance (1e-5 rad), evaluation_points and check_degeneracy; the defaults
-        below are those of the SGD methods.
+        rotation_tolerance (1e-5 rad), evaluation_points, check_degeneracy and record_trace; the
+        defaults below are those of the SGD methods.
 
         batch_size: source points per mini-batch (m). Default 160.
         optimizer: 'sgd', 'momentum', 'rmsprop', 'adam' or 'gauss-newton'. Default 'adam'.

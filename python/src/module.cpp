@@ -413,7 +413,8 @@ method : str, default 'sgd'
     batch methods: max_distance (0.05) and kernel_scale (0.01) with max_distance_unit,
     max_iterations (100), kernel ('none'), trim (1), neighbors (20), damping (1e-6: the initial
     Levenberg-Marquardt damping), translation_tolerance (1e-5, scaled units), rotation_tolerance
-    (1e-5, rad), evaluation_points (2000), check_degeneracy (True); any other raises TypeError.
+    (1e-5, rad), evaluation_points (2000), check_degeneracy (True), record_trace (False); any
+    other raises TypeError.
     For the SGD methods:
     batch_size (160), optimizer ('adam'; also sets learning_rate to that rule's usual value:
     sgd 2, momentum 2 * (1 - momentum), adam/rmsprop 0.01, gauss-newton 1), learning_rate (0.01,

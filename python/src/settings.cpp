@@ -292,6 +292,10 @@ constexpr std::array kBatchKeywords{
                  [](BatchSettings& s, const py::handle& v, Distance::Unit) {
                    s.check_degeneracy = as_bool(v, "check_degeneracy");
                  }},
+    BatchKeyword{"record_trace",
+                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
+                   s.record_trace = as_bool(v, "record_trace");
+                 }},
     BatchKeyword{"cost", [](BatchSettings& s, const py::handle& v,
                             Distance::Unit) { s.cost = cost_from_object(v, "cost"); }},
 };
@@ -411,11 +415,12 @@ std::string repr(const BatchSettings& s) {
              "BatchSettings(cost=CostType.{}, max_correspondence_distance={}, "
              "kernel=KernelType.{}, kernel_scale={}, trim_ratio={!r}, max_iterations={!r}, "
              "translation_tolerance={!r}, rotation_tolerance={!r}, initial_damping={!r}, "
-             "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r})")
+             "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r}, "
+             "record_trace={!r})")
       .format(cost_name(s.cost), repr(s.max_correspondence_distance), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, s.max_iterations, s.translation_tolerance,
               s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
-              s.check_degeneracy);
+              s.check_degeneracy, s.record_trace);
 }
 bool same(const BatchSettings& a, const BatchSettings& b) {
   return a.cost == b.cost && same(a.max_correspondence_distance, b.max_correspondence_distance) &&
@@ -424,7 +429,7 @@ bool same(const BatchSettings& a, const BatchSettings& b) {
          a.translation_tolerance == b.translation_tolerance &&
          a.rotation_tolerance == b.rotation_tolerance && a.initial_damping == b.initial_damping &&
          same(a.neighborhood, b.neighborhood) && a.evaluation_points == b.evaluation_points &&
-         a.check_degeneracy == b.check_degeneracy;
+         a.check_degeneracy == b.check_degeneracy && a.record_trace == b.record_trace;
 }
 
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
@@ -934,6 +939,9 @@ void bind_settings(py::module_& m) {
   def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy,
            "Check the final alignment for degenerate geometry and report it in "
            "RegistrationResult.constraint_ratio / degenerate. Default True.");
+  def_flag(batch, "record_trace", &BatchSettings::record_trace,
+           "Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, "
+           "pairs, mean squared pair distance). Default False.");
   def_value_methods(batch);
 }
 

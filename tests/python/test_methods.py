@@ -141,7 +141,20 @@ BATCH_DEFAULTS = {
     "initial_damping": 1e-6,
     "evaluation_points": 2000,
     "check_degeneracy": True,
+    "record_trace": False,
 }
+
+
+@pytest.mark.parametrize("method", ["icp", "gicp"])
+def test_batch_methods_record_a_trace(small_scene, method):
+    source, reference, _ = small_scene
+    r = sgd_icp.register(source, reference, method=method, record_trace=True)
+    assert len(r.trace) == r.iterations > 0
+    np.testing.assert_array_equal(r.trace.points_processed, len(source) * np.arange(1, r.iterations + 1))
+    np.testing.assert_allclose(r.trace.T_reference_source[-1], r.T_reference_source, atol=1e-12)
+    assert np.all(r.trace.step_size == 1.0) and r.trace.cost[-1] < r.trace.cost[0]
+    assert len(sgd_icp.register(source, reference, method=method).trace) == 0
+    assert sgd_icp.BatchSettings(record_trace=True).record_trace is True
 
 
 def test_batch_settings_defaults_are_the_cpp_ones():
