@@ -418,10 +418,11 @@ def exp_fig1(runner: Runner, out: str, quick: bool) -> tuple[list[dict], dict]:
     pair = pairs[0]
     curves = {}
     rows = []
-    for c in ["SGD-ICP fixed step (paper)", "SGD-ICP Adam (paper)", "SGD-ICP default"]:
+    for i, c in enumerate(CONFIGS):
         log(f"fig1: trace {c}")
-        tr = os.path.join(runner.tmp, f"fig1_trace_{c.split()[1]}_{c.split()[-1].strip('()')}.csv")
-        args = CONFIGS[c][2:] + ["--trace", tr]  # drop "--method sgd": register's default
+        tr = os.path.join(runner.tmp, f"fig1_trace_{i}.csv")
+        # `register --trace`: one row per iteration, for the batch methods one per pass
+        args = (CONFIGS[c][2:] if CONFIGS[c][:2] == ["--method", "sgd"] else CONFIGS[c]) + ["--trace", tr]
         j = runner.register_json(pair, args, f"fig1: {c}")
         if j is None or not os.path.exists(tr):
             continue
@@ -429,30 +430,11 @@ def exp_fig1(runner: Runner, out: str, quick: bool) -> tuple[list[dict], dict]:
         if not pts:
             runner.failures.append((f"fig1: {c}", "empty trace"))
             continue
-        # the returned result may be an iterate average (default): append it as the last point
-        pts.append(j["points_processed"])
-        err.append(j["translation_error_m"])
-        curves[c] = (pts, err)
-    # batch methods write no per-iteration trace: rerun with --max-iterations k = 1..K
-    for c, kmax in [("ICP", 40), ("ICP point-to-plane", 25), ("GICP", 20)]:
-        method = CONFIGS[c][1]
-        pts, err = [], []
-        log(f"fig1: {c} k = 1..{kmax}")
-        last = None
-        for k in range(1, kmax + 1):
-            j = runner.register_json(pair, ["--method", method, "--max-iterations", str(k)], f"fig1: {c} k={k}")
-            if j is None:
-                break
+        if c in STOCHASTIC:
+            # the returned result may be an iterate average (default): append it as the last point
             pts.append(j["points_processed"])
             err.append(j["translation_error_m"])
-            if last is not None and j["points_processed"] == last:  # converged before k
-                pts.pop(), err.pop()
-                break
-            last = j["points_processed"]
-            if j["converged"]:
-                break
-        if pts:
-            curves[c] = (pts, err)
+        curves[c] = (pts, err)
     for c, (pts, err) in curves.items():
         for p_, e in zip(pts, err):
             rows.append({"config": c, "points_processed": p_, "translation_error_m": e})
@@ -914,10 +896,10 @@ def make_report(args, exe, quick, repeat, t1, t2, f1, f1info, f2, f4, runner, pe
     L.append("![Fig. 1](fig1_data_efficiency.png)\n")
     if f1:
         L.append("Translation error against points processed on the car pair (line 5 of "
-                 "libpointmatcher_car.txt, identity start ~0.2 m / 14.5° from the truth). SGD curves are the "
-                 "per-iteration trace (`register --trace`; the last point of *default* is its returned "
-                 "iterate average); batch curves are separate runs with `--max-iterations k`, k = 1, 2, ... "
-                 "until converged. Filled marker: after the first iteration, open marker: the result.\n")
+                 "libpointmatcher_car.txt, identity start ~0.2 m / 14.5° from the truth). Every curve is the "
+                 "per-iteration trace of one run (`register --trace`: one point per mini-batch for SGD, per "
+                 "pass for the batch methods; the last point of *default* is its returned iterate average). "
+                 "Filled marker: after the first iteration, open marker: the result.\n")
         L.append("| method | points processed at the end | passes | final translation error [m] |")
         L.append("| --- | ---: | ---: | ---: |")
         last = {}
