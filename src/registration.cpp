@@ -194,11 +194,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   ConvergenceMonitor monitor(settings.convergence);
   std::size_t stage = 0;
   std::size_t empty_batches = 0;
-  // Sum of the iterates of the current test window: when the final stage's window tests
-  // stationary, its mean is the result (Polyak averaging over iterates that jitter about the
-  // optimum, without spending another window of iterations on them).
-  PoseVector window_sum = PoseVector::Zero();
-  std::size_t window_count = 0;
+  // The result when averaging: the mean of the final stage's stationary window (no further
+  // window of iterations is spent on it).
   std::optional<PoseVector> averaged;
 
   const auto finish = [&](StopReason reason, std::string message) {
@@ -281,21 +278,12 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       distances.clear();
     }
 
-    window_sum += theta;
-    ++window_count;
-    const bool stationary = monitor.update(gradient, step, inliers);
-    if (window_count == settings.convergence.window || stationary) {
-      // The monitor tests (and restarts) at the same boundaries.
-      if (stationary && stage == settings.refinement.stages && settings.average_iterates) {
-        averaged = window_sum / static_cast<double>(window_count);
-      }
-      window_sum.setZero();
-      window_count = 0;
-    }
-    if (!stationary) continue;
+    if (!monitor.update(gradient, step, inliers, theta)) continue;
 
+    // The stage is stationary.
     ++result.stages;
     if (stage == settings.refinement.stages) {
+      if (settings.average_iterates) averaged = monitor.window_mean();
       finish(StopReason::converged, "converged");
       stopped = true;
       continue;

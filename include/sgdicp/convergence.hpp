@@ -54,12 +54,15 @@ class ConvergenceMonitor {
     pairs_ = 0;
     displacement_ = PoseVector::Zero();
     path_length_ = 0.0;
+    iterate_sum_ = PoseVector::Zero();
   }
 
-  /// Records one iteration's mini-batch gradient, step and number of pairs; returns true at
-  /// the end of a window that tested stationary.
-  bool update(const PoseVector& gradient, const PoseVector& step, std::size_t pairs) {
+  /// Records one iteration's mini-batch gradient, step, number of pairs and the iterate after
+  /// the step; returns true at the end of a window that tested stationary.
+  bool update(const PoseVector& gradient, const PoseVector& step, std::size_t pairs,
+              const PoseVector& iterate) {
     ++count_;
+    iterate_sum_ += iterate;
     pairs_ += pairs;
     displacement_ += step;
     path_length_ += step.norm();
@@ -72,6 +75,7 @@ class ConvergenceMonitor {
                        rotation < settings_.rotation_tolerance;
     if (count_ < settings_.window) return false;
     const double n = static_cast<double>(count_);
+    window_mean_ = iterate_sum_ / n;
     const PoseVector mean = sum_ / n;
     PoseMatrix covariance = (sum_outer_ - n * mean * mean.transpose()) / (n - 1.0);
     // A tiny ridge keeps S invertible when a direction has no noise at all (exact data).
@@ -85,6 +89,10 @@ class ConvergenceMonitor {
     return stationary;
   }
 
+  /// Mean of the iterates of the last tested window (Polyak averaging: once a window tests
+  /// stationary its iterates jitter about the optimum, and their mean removes most of that).
+  [[nodiscard]] const PoseVector& window_mean() const { return window_mean_; }
+
  private:
   ConvergenceSettings settings_;
   std::size_t count_ = 0;
@@ -94,6 +102,8 @@ class ConvergenceMonitor {
   std::size_t pairs_ = 0;
   PoseVector displacement_ = PoseVector::Zero();
   double path_length_ = 0.0;
+  PoseVector iterate_sum_ = PoseVector::Zero();
+  PoseVector window_mean_ = PoseVector::Zero();
 };
 
 }  // namespace sgdicp
