@@ -107,9 +107,8 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   const PointCloud& src = source_with_features ? *source_with_features : source;
   const PointCloud& ref = reference.cloud();
 
-  BoundingBox source_box;
-  source_box.extend(src);
-  const double k = UnitCubeScaling::from_boxes(source_box, reference.bounding_box()).scale();
+  const double k =
+      UnitCubeScaling::from_boxes(BoundingBox::of(src), reference.bounding_box()).scale();
   const double d_max = settings.max_correspondence_distance.to_scaled(k) * k;  // metres
   const auto d_max_sq = static_cast<float>(d_max * d_max);
   const double kernel_scale = settings.kernel_scale.to_scaled(k) * k;  // metres

@@ -74,15 +74,9 @@ struct ReferenceIndex::Impl {
 
   Impl(PointCloud reference, const KdTreeSettings& settings)
       : cloud(std::move(reference)),
-        box(bounding_box_of(cloud)),
+        box(BoundingBox::of(cloud)),
         adaptor{&cloud.points, &box},
         tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(settings.leaf_size)) {}
-
-  static BoundingBox bounding_box_of(const PointCloud& c) {
-    BoundingBox b;
-    b.extend(c);
-    return b;
-  }
 };
 
 namespace {

@@ -158,10 +158,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   }
   const PointCloud& src = source_with_features ? *source_with_features : source;
 
-  BoundingBox source_box;
-  source_box.extend(src);
-  const UnitCubeScaling scaling =
-      UnitCubeScaling::from_boxes(source_box, reference.bounding_box(), settings.scaling_origin);
+  const UnitCubeScaling scaling = UnitCubeScaling::from_boxes(
+      BoundingBox::of(src), reference.bounding_box(), settings.scaling_origin);
   const double k = scaling.scale();
   const Eigen::Vector3d o = scaling.offset();
   const PointCloud& ref = reference.cloud();

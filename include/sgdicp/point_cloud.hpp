@@ -51,6 +51,12 @@ struct BoundingBox {
   void extend(const PointCloud& cloud) {
     for (const auto& p : cloud.points) extend(p.cast<double>());
   }
+  /// The box of a whole cloud.
+  [[nodiscard]] static BoundingBox of(const PointCloud& cloud) {
+    BoundingBox box;
+    box.extend(cloud);
+    return box;
+  }
   [[nodiscard]] bool valid() const { return (min.array() <= max.array()).all(); }
 };
 
