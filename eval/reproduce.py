@@ -90,9 +90,9 @@ PEER_NAME = {v: k for k, v in PEERS.items()}
 QUICK_PEERS = ["sg_icp_full_1t", "o3d_p2p_1t"]
 ORDER = list(CONFIGS) + list(PEERS)
 # Fig. 2, full run: perturbation seeds per pair (6 ETH pairs x 12 = 72 samples per bin and method; the
-# paper has ~100). Fig. 2 runs two CLI processes at once and costs 1.4-1.9 min per seed on the 2-core
-# VM, depending on how much of the second core the VM gets; the rest of the full run (peers included)
-# takes ~6.5 min. 12 seeds keep the full run under 30 min in the slow case (15 seeds took 34 min).
+# paper has ~100). Fig. 2 runs two CLI processes at once and cost 1.1 min per seed on the 2-core VM
+# of docs/results.md (1.4-1.9 min on a busier one); the rest of the full run (peers included) took
+# ~5 min. 12 seeds: 18 min in all there; under 30 min also in the slow case (15 seeds took 34 min).
 FIG2_SEEDS = 12
 
 plt.rcParams.update({
