@@ -119,9 +119,9 @@ class Optimizer {
         hessian_ = settings_.hessian_decay * hessian_ + (1.0 - settings_.hessian_decay) * h;
         const double c = 1.0 - std::pow(settings_.hessian_decay, static_cast<double>(t_));
         Eigen::Matrix<double, 6, 6> a = hessian_ / c;
-        const double lambda = settings_.damping * a.trace() / 6.0;
-        if (!(lambda > 0.0)) return PoseVector::Zero();  // no pairs yet: no curvature, no step
-        a.diagonal().array() += lambda;
+        const double mean_diagonal = a.trace() / 6.0;
+        if (!(mean_diagonal > 0.0)) return PoseVector::Zero();  // no pairs yet: no curvature
+        a.diagonal().array() += settings_.damping * mean_diagonal;
         return -alpha * a.ldlt().solve(g);
       }
     }
