@@ -6,7 +6,7 @@ Times small_gicp.KdTree(points, num_threads=1) (and with all threads) and Open3D
 KDTreeFlann on the reference cloud of each micro-benchmark dataset (bench/bench_data.hpp), in a
 warm process, median of --reps builds, for comparison with `sgdicp_micro_kdtree`'s
 kdtree_build/DATASET (issue 6 target: our build no slower than small_gicp's KdTree).
-Clouds are read with compare_peers.py's readers (cached in bench/.cache/clouds).
+Clouds are read with sgd_icp.read_points (the CLI's readers; needs `pip install .`).
 """
 import argparse
 import os
@@ -15,9 +15,15 @@ import sys
 import time
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import compare_peers as cp  # noqa: E402
+try:
+    import sgd_icp
+    from sgd_icp.peers import read_pairs
+except ImportError as e:
+    sys.exit(f"bench/kdtree_build_peers.py needs the sgd_icp Python package ({e}): "
+             "run `pip install .` in the repository (docs/python.md)")
 import numpy as np  # noqa: E402
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 DATASETS = [("kitti", "kitti_seq00.txt"), ("kinect", "pcl_kinect_frames.txt"),
             ("car", "libpointmatcher_car.txt"), ("eth", "eth_kinect_map_moved_copies.txt")]
@@ -26,7 +32,7 @@ DATASETS = [("kitti", "kitti_seq00.txt"), ("kinect", "pcl_kinect_frames.txt"),
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--reps", type=int, default=20)
-    ap.add_argument("--data", default=os.environ.get("SGDICP_DATA", os.path.join(cp.REPO, "..", "shared", "data")))
+    ap.add_argument("--data", default=os.environ.get("SGDICP_DATA", os.path.join(REPO, "..", "shared", "data")))
     args = ap.parse_args()
     import small_gicp
     try:
@@ -39,8 +45,8 @@ def main():
         path = os.path.join(args.data, "pairs", pf)
         if not os.path.exists(path):
             continue
-        ref = cp.read_pairs(path)[0].reference
-        pts = cp.cached_cloud(ref)[0].astype(np.float64)
+        ref = read_pairs(path)[0].reference
+        pts = sgd_icp.read_points(ref).astype(np.float64)
         pc = small_gicp.PointCloud(pts)
 
         def med(fn):

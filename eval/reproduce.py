@@ -2,7 +2,7 @@
 """Reproduce the experiments of Maken, Ramos & Ott, "Speeding up ICP with SGD" (ICRA 2019), sec. IV.
 
 usage: eval/reproduce.py [--quick] [--out DIR] [--sgdicp PATH] [--jobs N] [--fig2-seeds N] [--repeat N]
-                         [--no-peers | --peers LIST] [PAIRS_FILES ...]
+                         [--no-peers | --peers LIST] [--timeout SECONDS] [PAIRS_FILES ...]
 
 The paper's ETH Kinect sequences (medium-medium-fly/-translation/-rotation) are not available;
 this script uses the data of ../shared/data instead (Kinect-class: PCL OpenNI frames and the ETH
@@ -10,7 +10,9 @@ Kinect high-complexity map with moved copies; laser: libpointmatcher car; Velody
 and says so in the report. Every registration of ours is run by the sgdicp CLI (`bench`,
 `register`). Table I also has the peer libraries users would pick instead (small_gicp, Open3D,
 PCL through bench/pcl_adapter), measured in the same run on the same pairs by the runners of
-bench/compare_peers.py; a peer that is not installed or not built is reported as not run.
+bench/compare_peers.py (the package's sgd_icp.peers: each registration in a worker process, stopped
+after --timeout); a peer that is not installed or not built is reported as not run. Needs the
+sgd_icp package (`pip install .`) and matplotlib.
 
 Writes into --out (default results/reproduce):
   table1.csv / table2.csv / fig2.csv / fig4.csv  raw rows of `sgdicp bench --csv` (+ config column;
@@ -40,8 +42,14 @@ import sys
 import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(REPO, "bench"))
-import compare_peers as cp  # noqa: E402  (pairs reader, error definitions, the peers' runners)
+
+try:
+    # pairs files, the `sgdicp bench` runner and the peers' runners (those of bench/compare_peers.py)
+    from sgd_icp.peers import (SUCCESS_THRESHOLDS, PeerSettings, Session, build_methods, find_pcl_adapter,
+                               read_pairs, run_bench)
+except ImportError as e:
+    sys.exit(f"eval/reproduce.py needs the sgd_icp Python package ({e}): "
+             "run `pip install .` in the repository (docs/python.md)")
 
 import numpy as np  # noqa: E402
 import matplotlib  # noqa: E402
@@ -116,19 +124,6 @@ class Runner:
         self.tmp = os.path.join(out, "tmp")
         os.makedirs(self.tmp, exist_ok=True)
         self.failures: list[tuple[str, str]] = []  # (what, why)
-        self.n_calls = 0
-
-    def _tmpname(self, stem: str) -> str:
-        self.n_calls += 1
-        return os.path.join(self.tmp, f"{stem}_{os.getpid()}_{self.n_calls}_{time.monotonic_ns()}")
-
-    def write_pairs(self, pairs: list, stem: str) -> str:
-        path = self._tmpname(stem) + ".txt"
-        with open(path, "w") as f:
-            for p in pairs:
-                gt = " ".join(f"{v:.17g}" for v in p.T_gt[:3, :].reshape(-1))
-                f.write(f"{p.source} {p.reference} {gt}\n")
-        return path
 
     def bench(self, pairs: list, label: str, config: str, extra: list[str], what: str,
               timeout: float = 900) -> list[dict]:
@@ -149,26 +144,14 @@ class Runner:
         return out
 
     def _bench_once(self, pairs, label, config, extra, timeout):
-        pf = self.write_pairs(pairs, label)
-        out_csv = pf[:-4] + ".csv"
-        cmd = [self.sgdicp, "bench", pf, "--csv", out_csv] + CONFIGS[config] + extra
-        try:
-            p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            return None, f"timeout after {timeout:.0f} s: {' '.join(cmd[1:])}"
-        if p.returncode != 0 or not os.path.exists(out_csv):
-            err = (p.stderr or p.stdout).strip().replace("\n", " ")[-300:]
-            return None, f"exit {p.returncode}: {err}"
-        with open(out_csv, newline="") as f:
-            rows = list(csv.DictReader(f))
-        line_of = {i: pr.line for i, pr in enumerate(pairs)}
-        for r in rows:
+        run = run_bench(self.sgdicp, pairs, CONFIGS[config] + extra, self.tmp, timeout)
+        if run.status != "ok":
+            return None, f"{run.status}: {run.note}"
+        for r in run.rows:  # pair_line: the line of the pair in its own pairs file
             r["pairs"] = label
             r["config"] = config
-            # the temp file has one pair per line: map back to the line of the original file
-            r["pair_line"] = line_of.get(int(r["line"]) - 1, r["line"])
             r.pop("pairs_file", None)
-        return rows, ""
+        return run.rows, ""
 
     def register_json(self, pair, args: list[str], what: str) -> dict | None:
         gt = " ".join(f"{v:.17g}" for v in pair.T_gt[:3, :].reshape(-1))
@@ -228,7 +211,7 @@ def col(rows, key):
     return [float(r[key]) for r in rows]
 
 
-def success(r, t=0.05, deg=1.0) -> bool:
+def success(r, t=SUCCESS_THRESHOLDS[0][0], deg=SUCCESS_THRESHOLDS[0][1]) -> bool:
     return float(r["translation_error_m"]) < t and float(r["rotation_error_geodesic_deg"]) < deg
 
 
@@ -269,7 +252,7 @@ def table_md(rows: list[dict], group_by_pairs: bool = True) -> str:
 
 def load_pairs(stem_or_path: str) -> tuple[str, list]:
     path = stem_or_path if os.path.exists(stem_or_path) else os.path.join(PAIRS_DIR, stem_or_path + ".txt")
-    return os.path.splitext(os.path.basename(path))[0], cp.read_pairs(path)
+    return os.path.splitext(os.path.basename(path))[0], read_pairs(path)
 
 
 def exp_table(runner: Runner, pairs_files: list[str], configs: list[str], repeat: int, max_pairs: int | None,
@@ -292,41 +275,25 @@ def exp_table(runner: Runner, pairs_files: list[str], configs: list[str], repeat
     return rows
 
 
-def rotation_error_euler_rad(T: np.ndarray, T_gt: np.ndarray) -> float:
-    """The paper's rotation error, as the CLI computes it (sgdicp/metrics.hpp): |d roll| + |d pitch|
-    + |d yaw| of R = Rz(yaw) Ry(pitch) Rx(roll), each difference wrapped to (-pi, pi], rad."""
-    def rpy(R):
-        cos_pitch = math.hypot(R[0, 0], R[1, 0])
-        pitch = math.atan2(-R[2, 0], cos_pitch)
-        if cos_pitch < 1e-10:
-            return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
-        return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
-
-    def wrap(a):
-        a = math.remainder(a, 2 * math.pi)
-        return a + 2 * math.pi if a <= -math.pi else a
-
-    return sum(abs(wrap(a - b)) for a, b in zip(rpy(T[:3, :3]), rpy(T_gt[:3, :3])))
-
-
 class Peers:
-    """The peer libraries of Table I, run in this process by bench/compare_peers.py's runners."""
+    """The peer libraries of Table I, run by sgd_icp.peers (the runners of bench/compare_peers.py):
+    each registration in a worker process of its library, stopped after timeout_s."""
 
-    def __init__(self, wanted: list[str], exe: str):
-        self.active: list = []                    # compare_peers.Method that can run
+    def __init__(self, wanted: list[str], exe: str, timeout_s: float):
+        self.active: list = []                    # sgd_icp.peers.Method that can run
         self.not_run: list[tuple[str, str]] = []  # (method, reason)
         self.versions: dict[str, str] = {}
-        self.ctx = None
+        self.settings = PeerSettings(timeout_s=timeout_s)
+        self.session = None
         if not wanted:
             return
+        pcl_adapter = find_pcl_adapter(None, REPO)
         try:
-            args = cp.finish_args(cp.build_parser().parse_args(["--no-install", "--sgdicp", exe]))
-            methods = {m.name: m for m in cp.build_methods(args)}
+            methods = {m.name: m for m in build_methods(self.settings, exe, pcl_adapter)}
         except Exception as e:  # noqa: BLE001 - a broken peer installation is recorded, not fatal
             self.not_run = [(w, f"setup failed: {e!r}") for w in wanted]
             return
-        self.ctx = cp.Context(args)
-        self.args = args
+        self.session = Session(self.settings, sgdicp=exe, pcl_adapter=pcl_adapter, log=log)
         for w in wanted:
             m = methods[w]
             if m.available:
@@ -343,13 +310,13 @@ class Peers:
                     self.versions[mod] = "?"
 
     def close(self) -> None:
-        if self.ctx is not None and self.ctx.pcl is not None:
-            self.ctx.pcl.close()
+        if self.session is not None:
+            self.session.close()
 
 
 def exp_peers(runner: Runner, peers: Peers, pairs_files: list[str], max_pairs: int | None, what: str) -> list[dict]:
     """Every active peer once on every pair (the peers are deterministic from the identity start),
-    after one untimed warm-up run per library; rows in the columns of `sgdicp bench --csv`."""
+    after one untimed warm-up run per method; rows in the columns of `sgdicp bench --csv`."""
     if not peers.active:
         return []
     files = []
@@ -360,9 +327,9 @@ def exp_peers(runner: Runner, peers: Peers, pairs_files: list[str], max_pairs: i
             continue  # recorded by exp_table
         files.append((label, pairs[:max_pairs] if max_pairs else pairs))
     everything = [p for _, ps in files for p in ps]
-    log(f"{what}: peers {', '.join(PEER_NAME[m.name] for m in peers.active)}: reading clouds, warm-up")
+    log(f"{what}: peers {', '.join(PEER_NAME[m.name] for m in peers.active)}: reading clouds")
     try:
-        readable = {id(p) for p in cp.prepare(peers.ctx, everything, peers.active)}
+        readable = {id(p) for p in peers.session.prepare(everything, peers.active)}
     except Exception as e:  # noqa: BLE001
         peers.not_run += [(m.name, f"setup failed: {e!r}") for m in peers.active]
         peers.active = []
@@ -377,19 +344,16 @@ def exp_peers(runner: Runner, peers: Peers, pairs_files: list[str], max_pairs: i
                 row = {"pairs": label, "pair_line": p.line, "config": name, "peer_method": m.name,
                        "source": p.source, "reference": p.reference}
                 if id(p) not in readable:
-                    row.update(status="error", note="cannot read the clouds (compare_peers readers)")
+                    row.update(status="error", note="cannot read the clouds")
                 else:
-                    o, t_err, r_err_deg = cp.run_once(m, p, 0, peers.ctx)
-                    n_src = len(peers.ctx.clouds[p.source][0])
-                    used = n_src
-                    for kv in o.note.split(";"):
-                        if kv.startswith("src_points_used="):
-                            used = int(kv.split("=", 1)[1])
+                    o = peers.session.run(m, p)
+                    n_src = peers.session.points[p.source]
+                    used = o.source_points_used if o.source_points_used >= 0 else n_src
                     row.update(status=o.status, source_points=n_src,
-                               reference_points=len(peers.ctx.clouds[p.reference][0]),
-                               translation_error_m=t_err, rotation_error_geodesic_deg=r_err_deg,
-                               rotation_error_euler_rad=(rotation_error_euler_rad(o.T, p.T_gt)
-                                                         if o.T is not None else float("nan")),
+                               reference_points=peers.session.points[p.reference],
+                               translation_error_m=o.translation_error_m,
+                               rotation_error_geodesic_deg=o.rotation_error_geodesic_deg,
+                               rotation_error_euler_rad=o.rotation_error_euler_rad,
                                time_ms=o.time_ms, cpu_ms=o.cpu_ms,
                                iterations=o.iterations if o.iterations >= 0 else "",
                                converged="" if o.converged is None else int(o.converged),
@@ -654,6 +618,9 @@ def main(argv=None) -> int:
     ap.add_argument("--peers", metavar="LIST", help="comma-separated peers for Table I, as named by "
                     f"bench/compare_peers.py: {','.join(PEERS.values())} [all that are installed; "
                     f"--quick: {','.join(QUICK_PEERS)}]")
+    ap.add_argument("--timeout", type=float, default=PeerSettings.timeout_s, metavar="SECONDS",
+                    help="a peer registration longer than this is stopped and counted with this time "
+                         f"[{PeerSettings.timeout_s:g}]")
     args = ap.parse_args(argv)
     if args.peers is not None and args.no_peers:
         ap.error("--peers and --no-peers exclude each other")
@@ -693,7 +660,7 @@ def main(argv=None) -> int:
 
     # Table I: the peers, same pairs
     t0 = time.perf_counter()
-    peers = Peers(wanted, exe)
+    peers = Peers(wanted, exe, args.timeout)
     for w, why in peers.not_run:
         log(f"table1: {PEER_NAME[w]} ({w}) not run: {why}")
     try:
@@ -809,17 +776,17 @@ def peers_md(peers: Peers, t1: list[dict]) -> str:
     """The report's paragraph on the peers: what ran, how it is timed, what did not run and why."""
     L = []
     if peers.active:
-        a = peers.args
+        a = peers.settings
         names = {m.name for m in peers.active}
         fam = {m.family for m in peers.active}
         ran = ", ".join(f"**{PEER_NAME[m.name]}** (`{m.name}`: {m.description})" for m in peers.active)
         vers = "".join(f", {k} {v}" for k, v in peers.versions.items())
         text = [f"**Peers** (Table I only{vers}): {ran}.",
-                "Run on the same pairs in this run, in this Python process by the runners of "
-                "`bench/compare_peers.py`" + (" (PCL in its persistent C++ adapter `bench/pcl_adapter`)"
-                                              if "pcl" in fam else "")
-                + f", after one untimed warm-up run per library; identity start, maximum correspondence distance "
-                f"{a.max_distance:g} m, at most {a.max_iterations} iterations, one thread (`OMP_NUM_THREADS=1`"
+                "Run on the same pairs in this run by the runners of `bench/compare_peers.py` (`sgd_icp.peers`), "
+                "each registration in a warm worker process of its library"
+                + (" (PCL in its persistent C++ adapter `bench/pcl_adapter`)" if "pcl" in fam else "")
+                + f", after one untimed warm-up run per method; identity start, maximum correspondence distance "
+                f"{a.max_distance_m:g} m, at most {a.max_iterations} iterations, one thread (`OMP_NUM_THREADS=1`"
                 + (", small_gicp `num_threads=1`" if "small_gicp" in fam else "") + "), one run per pair "
                 "(deterministic, like our batch methods)."]
         if "sg_gicp_vox_1t" in names:
@@ -830,8 +797,8 @@ def peers_md(peers: Peers, t1: list[dict]) -> str:
                     "arrays into each library's cloud type are excluded.")
         text.append("Passes = iterations × source points used / source points"
                     + (" (Open3D reports no iteration count: -)." if "open3d" in fam else "."))
-        if "pcl" in fam:
-            text.append(f"A PCL run longer than {a.timeout:g} s is stopped and counted with that time.")
+        text.append(f"A run longer than {a.timeout_s:g} s is stopped and counted with that time; one that "
+                    "crashes its process is a failed run.")
         cpu = []
         for m in peers.active:
             x = [float(r["cpu_ms"]) / float(r["time_ms"]) for r in t1 if r.get("peer_method") == m.name
