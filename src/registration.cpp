@@ -1,17 +1,15 @@
 #include "sgdicp/registration.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <optional>
 
-#include "checks.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/evaluation.hpp"
-#include "sgdicp/features.hpp"
 #include "sgdicp/pose.hpp"
 #include "sgdicp/sampler.hpp"
 #include "sgdicp/scaling.hpp"
+#include "solver_support.hpp"
 
 namespace sgdicp {
 
@@ -84,37 +82,8 @@ void SgdSettings::validate() const {
 
 namespace {
 
-double median_of(std::vector<float>& values) {
-  if (values.empty()) return 0.0;
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  return static_cast<double>(*mid);
-}
-
 const Eigen::Vector3f kNoNormal = Eigen::Vector3f::Zero();
 const Eigen::Matrix3f kNoCovariance = Eigen::Matrix3f::Identity();
-
-// One mini-batch of the paper's cost (Algorithm 1, lines 2-8): each source point moved by the
-// current pose, paired with its nearest reference point within d_max, added to the gradient.
-// The tree lives in metres, the pose in scaled space. Kept apart from align() so that the
-// compiler inlines the small Eigen products of this hot loop (measured with callgrind).
-void accumulate_point_to_point(const PointCloud& source, const ReferenceIndex& reference,
-                               const std::vector<std::uint32_t>& batch,
-                               const EulerPoseJacobian& pose, const Eigen::Vector3d& o, double k,
-                               float d_max_sq_m, CostAccumulator& accumulator,
-                               std::vector<float>& distances) {
-  const PointCloud& ref = reference.cloud();
-  for (const std::uint32_t i : batch) {
-    const Eigen::Vector3d s = (source.points[i].cast<double>() - o) / k;
-    const Eigen::Vector3d moved = pose.transform(s);
-    const Eigen::Vector3f query = (moved * k + o).cast<float>();
-    const auto nn = reference.nearest(query, d_max_sq_m);
-    if (!nn) continue;
-    const Eigen::Vector3d r = (ref.points[nn->index].cast<double>() - o) / k;
-    accumulator.add_point_to_point(pose.jacobian(s), moved - r);
-    distances.push_back(std::sqrt(nn->squared_distance) / static_cast<float>(k));
-  }
-}
 
 // A pair found for a mini-batch, kept for trimming and for the costs that need more than the
 // two points.
@@ -126,198 +95,235 @@ struct Pair {
   float distance;  // scaled
 };
 
-void collect_pairs(const PointCloud& source, const ReferenceIndex& reference,
-                   const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
-                   const Eigen::Vector3d& o, double k, float d_max_sq_m, std::vector<Pair>& pairs) {
-  pairs.clear();
-  for (const std::uint32_t i : batch) {
-    const Eigen::Vector3d s = (source.points[i].cast<double>() - o) / k;
-    const Eigen::Vector3d moved = pose.transform(s);
-    const Eigen::Vector3f query = (moved * k + o).cast<float>();
-    if (const auto nn = reference.nearest(query, d_max_sq_m)) {
-      pairs.push_back(
-          {s, moved, i, nn->index, std::sqrt(nn->squared_distance) / static_cast<float>(k)});
+// Algorithm 1, lines 3-8: each point of a mini-batch moved by the current pose, paired with its
+// nearest reference point within d_max, added to the mini-batch cost. The tree lives in metres,
+// the pose in the scaled space.
+class MiniBatchPairing {
+ public:
+  MiniBatchPairing(const PointCloud& source, const ReferenceIndex& reference,
+                   const UnitCubeScaling& scaling, const SgdSettings& settings)
+      : source_(source),
+        reference_(reference),
+        scaling_(scaling),
+        settings_(settings),
+        kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())),
+        plain_(settings.cost == CostType::point_to_point && settings.kernel == KernelType::none &&
+               settings.trim_ratio >= 1.0) {
+    pairs_.reserve(settings.batch_size);
+  }
+
+  // The cost of the batch at `pose` over the pairs within d_max_scaled; their distances (scaled)
+  // are appended to `distances`.
+  CostAccumulator accumulate(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
+                             double d_max_scaled, bool with_hessian,
+                             std::vector<float>& distances) {
+    CostAccumulator cost(settings_.kernel, kernel_scale_, with_hessian);
+    const double k = scaling_.scale();
+    const auto d_max_sq_m = static_cast<float>(d_max_scaled * k * d_max_scaled * k);
+    if (plain_) {
+      add_point_to_point(batch, pose, d_max_sq_m, cost, distances);
+    } else {
+      collect(batch, pose, d_max_sq_m);
+      trim();
+      add_general(pose, cost, distances);
+    }
+    return cost;
+  }
+
+ private:
+  // The paper's pair cost without kernel or trimming: the short path of the hot loop. Kept
+  // apart so that the compiler inlines its small Eigen products (measured with callgrind).
+  void add_point_to_point(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
+                          float d_max_sq_m, CostAccumulator& cost,
+                          std::vector<float>& distances) const {
+    const PointCloud& ref = reference_.cloud();
+    const auto k = static_cast<float>(scaling_.scale());
+    for (const std::uint32_t i : batch) {
+      const Eigen::Vector3d s = scaling_.to_scaled(source_.points[i]);
+      const Eigen::Vector3d moved = pose.transform(s);
+      const auto nn = reference_.nearest(scaling_.to_metric(moved).cast<float>(), d_max_sq_m);
+      if (!nn) continue;
+      const Eigen::Vector3d r = scaling_.to_scaled(ref.points[nn->index]);
+      cost.add_point_to_point(pose.jacobian(s), moved - r);
+      distances.push_back(std::sqrt(nn->squared_distance) / k);
     }
   }
-}
+
+  void collect(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
+               float d_max_sq_m) {
+    const auto k = static_cast<float>(scaling_.scale());
+    pairs_.clear();
+    for (const std::uint32_t i : batch) {
+      const Eigen::Vector3d s = scaling_.to_scaled(source_.points[i]);
+      const Eigen::Vector3d moved = pose.transform(s);
+      const Eigen::Vector3f query = scaling_.to_metric(moved).cast<float>();
+      if (const auto nn = reference_.nearest(query, d_max_sq_m)) {
+        pairs_.push_back({s, moved, i, nn->index, std::sqrt(nn->squared_distance) / k});
+      }
+    }
+  }
+
+  // Trimmed ICP (Chetverikov et al. 2002): keep the closest fraction of the batch's pairs.
+  void trim() {
+    if (settings_.trim_ratio >= 1.0 || pairs_.empty()) return;
+    const auto keep = static_cast<std::size_t>(
+        std::ceil(settings_.trim_ratio * static_cast<double>(pairs_.size())));
+    std::nth_element(pairs_.begin(), pairs_.begin() + static_cast<std::ptrdiff_t>(keep - 1),
+                     pairs_.end(),
+                     [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+    pairs_.resize(keep);
+  }
+
+  // Any cost of cost.hpp with its kernel: rho(e^T Omega e).
+  void add_general(const EulerPoseJacobian& pose, CostAccumulator& cost,
+                   std::vector<float>& distances) const {
+    const PointCloud& ref = reference_.cloud();
+    for (const Pair& pair : pairs_) {
+      const Eigen::Vector3d r = scaling_.to_scaled(ref.points[pair.reference_index]);
+      const Eigen::Matrix3d omega = information_matrix(
+          settings_.cost, ref.has_normals() ? ref.normals[pair.reference_index] : kNoNormal,
+          ref.has_covariances() ? ref.covariances[pair.reference_index] : kNoCovariance,
+          source_.has_covariances() ? source_.covariances[pair.source_index] : kNoCovariance,
+          pose.rotation());
+      cost.add(pose.jacobian(pair.s), pair.moved - r, omega);
+      distances.push_back(pair.distance);
+    }
+  }
+
+  const PointCloud& source_;
+  const ReferenceIndex& reference_;
+  const UnitCubeScaling& scaling_;
+  const SgdSettings& settings_;
+  double kernel_scale_;  // scaled
+  bool plain_;
+  std::vector<Pair> pairs_;
+};
+
+// One SGD-ICP run in the scaled space: Algorithm 1, then the refinement stages.
+class SgdRun {
+ public:
+  SgdRun(const PointCloud& source, const ReferenceIndex& reference, const SgdSettings& settings,
+         const UnitCubeScaling& scaling)
+      : settings_(settings),
+        scaling_(scaling),
+        pairing_(source, reference, scaling, settings),
+        sampler_(static_cast<std::uint32_t>(source.size()), settings.seed),
+        optimizer_(settings.optimizer),
+        monitor_(settings.convergence),
+        schedule_(settings.refinement,
+                  settings.max_correspondence_distance.to_scaled(scaling.scale()),
+                  settings.refinement.min_distance.to_scaled(scaling.scale()),
+                  settings.batch_size * settings.convergence.window) {
+    batch_.reserve(settings.batch_size);
+  }
+
+  // Runs from theta until converged, stopped or out of iterations (the reason goes into
+  // result); returns the pose to report, in the scaled space.
+  PoseVector minimise(PoseVector theta, RegistrationResult& result) {
+    const std::size_t m = settings_.batch_size;
+    for (std::size_t it = 0; it < settings_.max_iterations; ++it) {
+      sampler_.next_batch(m, batch_);  // line 2
+      const EulerPoseJacobian pose(theta);
+      const CostAccumulator cost =  // lines 3-8
+          pairing_.accumulate(batch_, pose, schedule_.max_distance(), optimizer_.needs_hessian(),
+                              schedule_.pair_distances());
+      const PoseVector gradient = cost.gradient(m);  // eq. 6-7
+      const PoseVector step = optimizer_.step(gradient, cost.hessian(m), schedule_.step_scale());
+      theta += step;  // lines 9-10, eq. 3
+      record(theta, cost, result);
+      if (stopped(theta, cost.pairs(), result)) return theta;
+      const WindowTest test = monitor_.update(gradient, step, cost.pairs(), theta);
+      if (test == WindowTest::incomplete) continue;
+      schedule_.end_window();
+      if (test == WindowTest::moving) continue;
+      ++result.stages;
+      if (schedule_.final_stage()) {
+        detail::set_stop(result, StopReason::converged, "converged");
+        return settings_.average_iterates ? monitor_.window_mean() : theta;
+      }
+      schedule_.refine();
+    }
+    detail::set_stop(result, StopReason::max_iterations,
+                     detail::iteration_limit_message(settings_.max_iterations));
+    return theta;
+  }
+
+  // d_max at the end of the run, scaled.
+  [[nodiscard]] double max_distance() const { return schedule_.max_distance(); }
+
+ private:
+  void record(const PoseVector& theta, const CostAccumulator& cost, RegistrationResult& result) {
+    result.iterations += 1;
+    result.points_processed += batch_.size();
+    if (!settings_.record_trace) return;
+    result.trace.push_back({result.iterations, result.points_processed,
+                            scaling_.to_metric(transform_from_pose(theta)),
+                            settings_.optimizer.learning_rate * schedule_.step_scale(),
+                            schedule_.max_distance() * scaling_.scale(), cost.pairs(),
+                            cost.cost(settings_.batch_size)});
+  }
+
+  // The guards: a pose that blew up, or a whole window of mini-batches without a pair.
+  bool stopped(const PoseVector& theta, std::size_t pairs, RegistrationResult& result) {
+    // Both clouds lie in the unit box of the scaled space: a translation of 10 box sizes can
+    // only come from steps that blew up.
+    if (!theta.allFinite() || theta.head<3>().cwiseAbs().maxCoeff() > 10.0) {
+      detail::set_stop(result, StopReason::diverged,
+                       "the pose diverged (translation beyond 10 times the scene size; step size "
+                       "too large for this data?)");
+      return true;
+    }
+    empty_batches_ = pairs == 0 ? empty_batches_ + 1 : 0;
+    schedule_.end_batch(pairs);
+    if (empty_batches_ < settings_.convergence.window) return false;
+    detail::set_stop(result, StopReason::no_correspondences,
+                     "no source point had a reference point within d_max = " +
+                         std::to_string(schedule_.max_distance() * scaling_.scale()) + " m for " +
+                         std::to_string(empty_batches_) + " mini-batches in a row");
+    return true;
+  }
+
+  const SgdSettings& settings_;
+  const UnitCubeScaling& scaling_;
+  MiniBatchPairing pairing_;
+  EpochSampler sampler_;
+  Optimizer optimizer_;
+  ConvergenceMonitor monitor_;
+  RefinementSchedule schedule_;
+  std::vector<std::uint32_t> batch_;
+  std::size_t empty_batches_ = 0;
+};
 
 }  // namespace
 
 RegistrationResult align(const PointCloud& source, const ReferenceIndex& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
-  const auto start = std::chrono::steady_clock::now();
+  const detail::Stopwatch clock;
   settings.validate();
-  detail::check_source(source, settings.batch_size, "the mini-batch size");
-  detail::check_initial_transform(T_init);
-  check_reference_features(reference, settings.cost);
-  // Plane-to-plane also needs the source's covariances: estimated here (and timed) if missing.
-  std::optional<PointCloud> source_with_features;
-  if (needs_covariances(settings.cost) && !source.has_covariances()) {
-    source_with_features = source;
-    estimate_covariances(*source_with_features, settings.neighborhood);
-  }
-  const PointCloud& src = source_with_features ? *source_with_features : source;
-
-  const UnitCubeScaling scaling = UnitCubeScaling::from_boxes(
-      BoundingBox::of(src), reference.bounding_box(), settings.scaling_origin);
-  const double k = scaling.scale();
-  const Eigen::Vector3d o = scaling.offset();
-  const PointCloud& ref = reference.cloud();
+  detail::check_pair(reference, settings.cost, T_init);
+  const detail::PreparedSource src(source, settings.cost, settings.neighborhood,
+                                   settings.batch_size, "the mini-batch size");
+  const UnitCubeScaling scaling =
+      detail::scaling_of(src.cloud(), reference, settings.scaling_origin);
 
   RegistrationResult result;
-  result.scale_m = k;
-
+  result.scale_m = scaling.scale();
+  SgdRun run(src.cloud(), reference, settings, scaling);
   // Matrices read from text carry few digits: project onto the nearest rotation.
-  PoseVector theta = pose_from_transform(scaling.to_scaled(orthonormalized(T_init)));
-  Optimizer optimizer(settings.optimizer);
-  EpochSampler sampler(static_cast<std::uint32_t>(src.size()), settings.seed);
-
-  const double d_max_initial = settings.max_correspondence_distance.to_scaled(k);  // scaled
-  double d_max = d_max_initial;
-  const double d_min = std::min(d_max, settings.refinement.min_distance.to_scaled(k));
-  const double kernel_scale = settings.kernel_scale.to_scaled(k);
-  double lr_scale = 1.0;
-  // The paper's pair cost without kernel or trimming takes the short path of the hot loop.
-  const bool plain = settings.cost == CostType::point_to_point &&
-                     settings.kernel == KernelType::none && settings.trim_ratio >= 1.0;
-
-  std::vector<std::uint32_t> batch;
-  batch.reserve(settings.batch_size);
-  std::vector<Pair> pairs;
-  pairs.reserve(settings.batch_size);
-  // Scaled correspondence distances of the current and the last complete window of iterations.
-  std::vector<float> distances;
-  std::vector<float> last_window_distances;
-  distances.reserve(settings.batch_size * settings.convergence.window);
-  ConvergenceMonitor monitor(settings.convergence);
-  std::size_t stage = 0;
-  std::size_t empty_batches = 0;
-  // The result when averaging: the mean of the final stage's stationary window (no further
-  // window of iterations is spent on it).
-  std::optional<PoseVector> averaged;
-
-  const auto finish = [&](StopReason reason, std::string message) {
-    result.stop_reason = reason;
-    result.converged = reason == StopReason::converged;
-    result.message = std::move(message);
-  };
-
-  bool stopped = false;
-  for (std::size_t it = 0; it < settings.max_iterations && !stopped; ++it) {
-    // Algorithm 1, lines 2-8: next mini-batch, moved by theta_{t-1}, paired with its nearest
-    // reference point within d_max. The tree lives in metres; the pose lives in scaled space.
-    sampler.next_batch(settings.batch_size, batch);
-    const EulerPoseJacobian pose(theta);
-    CostAccumulator accumulator(settings.kernel, kernel_scale, optimizer.needs_hessian());
-    const auto d_max_sq_m = static_cast<float>(d_max * k * d_max * k);
-    if (plain) {
-      accumulate_point_to_point(src, reference, batch, pose, o, k, d_max_sq_m, accumulator,
-                                distances);
-    } else {
-      collect_pairs(src, reference, batch, pose, o, k, d_max_sq_m, pairs);
-      // Trimming: keep the closest fraction of the batch's pairs.
-      if (settings.trim_ratio < 1.0 && !pairs.empty()) {
-        const auto keep = static_cast<std::size_t>(
-            std::ceil(settings.trim_ratio * static_cast<double>(pairs.size())));
-        std::nth_element(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(keep - 1),
-                         pairs.end(),
-                         [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
-        pairs.resize(keep);
-      }
-      for (const Pair& pr : pairs) {
-        const Eigen::Vector3d r = (ref.points[pr.reference_index].cast<double>() - o) / k;
-        const Eigen::Matrix3d omega = information_matrix(
-            settings.cost, ref.has_normals() ? ref.normals[pr.reference_index] : kNoNormal,
-            ref.has_covariances() ? ref.covariances[pr.reference_index] : kNoCovariance,
-            src.has_covariances() ? src.covariances[pr.source_index] : kNoCovariance,
-            pose.rotation());
-        accumulator.add(pose.jacobian(pr.s), pr.moved - r, omega);
-        distances.push_back(pr.distance);
-      }
-    }
-    const std::size_t inliers = accumulator.pairs();
-    // Lines 9-10: one optimiser step on the mean cost over the kept pairs (eq. 6, 7).
-    const PoseVector gradient = accumulator.gradient(settings.batch_size);
-    const PoseVector step =
-        optimizer.step(gradient, accumulator.hessian(settings.batch_size), lr_scale);
-    theta += step;
-    result.iterations = it + 1;
-    result.points_processed += batch.size();
-
-    if (settings.record_trace) {
-      result.trace.push_back({result.iterations, result.points_processed,
-                              scaling.to_metric(transform_from_pose(theta)),
-                              settings.optimizer.learning_rate * lr_scale, d_max * k, inliers,
-                              accumulator.cost(settings.batch_size)});
-    }
-    // Both clouds lie in the unit box of the scaled space: a translation of 10 box sizes can
-    // only come from steps that blew up.
-    if (!theta.allFinite() || theta.head<3>().cwiseAbs().maxCoeff() > 10.0) {
-      finish(StopReason::diverged,
-             "the pose diverged (translation beyond 10 times the scene size; step size too "
-             "large for this data?)");
-      stopped = true;
-      break;
-    }
-    empty_batches = inliers == 0 ? empty_batches + 1 : 0;
-    // A refined d_max can fall below the jitter of the steps (an exact copy gives a median pair
-    // distance of 0 while Adam still steps ~alpha): a mini-batch without pairs then widens it
-    // again, up to the initial d_max, instead of losing the data.
-    if (inliers == 0 && d_max < d_max_initial) d_max = std::min(2.0 * d_max, d_max_initial);
-    if (empty_batches >= settings.convergence.window) {
-      finish(StopReason::no_correspondences,
-             "no source point had a reference point within d_max = " + std::to_string(d_max * k) +
-                 " m for " + std::to_string(empty_batches) + " mini-batches in a row");
-      stopped = true;
-      break;
-    }
-    if ((it + 1) % settings.convergence.window == 0) {
-      last_window_distances.swap(distances);
-      distances.clear();
-    }
-
-    if (!monitor.update(gradient, step, inliers, theta)) continue;
-
-    // The stage is stationary.
-    ++result.stages;
-    if (stage == settings.refinement.stages) {
-      if (settings.average_iterates) averaged = monitor.window_mean();
-      finish(StopReason::converged, "converged");
-      stopped = true;
-      continue;
-    }
-    // Refinement: tighter correspondences, smaller steps.
-    ++stage;
-    lr_scale *= settings.refinement.step_decay;
-    std::vector<float>& recent =
-        last_window_distances.size() > distances.size() ? last_window_distances : distances;
-    const double robust = settings.refinement.distance_factor * median_of(recent);
-    d_max = std::clamp(robust, d_min, d_max);
-    monitor.start_stage();
-  }
-  if (!stopped) {
-    finish(StopReason::max_iterations, "reached the iteration limit of " +
-                                           std::to_string(settings.max_iterations) +
-                                           " before converging");
-  }
-  const PoseVector returned = averaged.value_or(theta);
-
-  result.T_reference_source = scaling.to_metric(transform_from_pose(returned));
-  result.final_max_distance_m = d_max * k;
-  evaluate_alignment(src, reference, result.final_max_distance_m,
-                     EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
-                     result);
-  result.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const PoseVector theta_init = pose_from_transform(scaling.to_scaled(orthonormalized(T_init)));
+  const PoseVector theta = run.minimise(theta_init, result);
+  result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
+  detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
+                   EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
+                   clock);
   return result;
 }
 
 RegistrationResult align(const PointCloud& source, const PointCloud& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
   settings.validate();
-  ReferenceIndex index(reference);
-  prepare_reference(index, settings.cost, settings.neighborhood);
-  return align(source, index, settings, T_init);
+  return align(source, detail::index_for(reference, settings.cost, settings.neighborhood), settings,
+               T_init);
 }
 
 }  // namespace sgdicp

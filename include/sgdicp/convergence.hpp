@@ -48,6 +48,13 @@ struct ConvergenceSettings {
   double rotation_tolerance = 1e-6;
 };
 
+/// The verdict of ConvergenceMonitor::update on the iteration it has just recorded.
+enum class WindowTest {
+  incomplete,  ///< the window is not full yet
+  moving,      ///< the window is full and the run is still making progress
+  stationary,  ///< the window is full and tested stationary
+};
+
 class ConvergenceMonitor {
  public:
   explicit ConvergenceMonitor(const ConvergenceSettings& settings) : settings_(settings) {}
@@ -65,9 +72,9 @@ class ConvergenceMonitor {
   }
 
   /// Records one iteration's mini-batch gradient, step, number of pairs and the iterate after
-  /// the step; returns true at the end of a window that tested stationary.
-  bool update(const PoseVector& gradient, const PoseVector& step, std::size_t pairs,
-              const PoseVector& iterate) {
+  /// the step; tests the window when it is full, then starts the next one.
+  WindowTest update(const PoseVector& gradient, const PoseVector& step, std::size_t pairs,
+                    const PoseVector& iterate) {
     ++count_;
     iterate_sum_ += iterate;
     pairs_ += pairs;
@@ -76,7 +83,7 @@ class ConvergenceMonitor {
     sum_ += gradient;
     sum_outer_.noalias() += gradient * gradient.transpose();
     all_steps_small_ = all_steps_small_ && below_tolerances(step);
-    if (count_ < settings_.window) return false;
+    if (count_ < settings_.window) return WindowTest::incomplete;
     const double n = static_cast<double>(count_);
     window_mean_ = iterate_sum_ / n;
     const PoseVector mean = sum_ / n;
@@ -92,7 +99,7 @@ class ConvergenceMonitor {
     const bool exact = all_steps_small_ && below_tolerances(mean);
     const bool stationary = enough_pairs && ((insignificant && jittering) || exact);
     start_stage();
-    return stationary;
+    return stationary ? WindowTest::stationary : WindowTest::moving;
   }
 
   /// Mean of the iterates of the last tested window (Polyak averaging: once a window tests

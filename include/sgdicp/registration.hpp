@@ -9,44 +9,17 @@
 
 #include "sgdicp/convergence.hpp"
 #include "sgdicp/cost.hpp"
+#include "sgdicp/distance.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
 #include "sgdicp/optimizer.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/preprocessing.hpp"
+#include "sgdicp/refinement.hpp"
 #include "sgdicp/result.hpp"
 #include "sgdicp/robust_kernel.hpp"
 #include "sgdicp/scaling.hpp"
 
 namespace sgdicp {
-
-/// A length with an explicit unit: metres, or units of the paper's [0, 1] scaled space
-/// (1 scaled unit = the largest side of the joint bounding box of both clouds).
-struct Distance {
-  enum class Unit { metres, scaled };
-  double value = 0.0;
-  Unit unit = Unit::scaled;
-
-  static constexpr Distance metres(double v) { return {v, Unit::metres}; }
-  static constexpr Distance scaled(double v) { return {v, Unit::scaled}; }
-  /// The value in scaled units, given the metres per scaled unit.
-  [[nodiscard]] double to_scaled(double metres_per_unit) const {
-    return unit == Unit::scaled ? value : value / metres_per_unit;
-  }
-};
-
-/// Refinement after the paper's coarse phase (our answer to DESIGN's "central problem"). Each
-/// time a stage is stationary (ConvergenceMonitor), d_max shrinks to `distance_factor` times the
-/// median correspondence distance of the stage's last `window` iterations (never below
-/// `min_distance`; a mini-batch without any pair doubles it again, up to the initial d_max) and
-/// the step size is multiplied by `step_decay`. When the last of these `stages` is stationary
-/// the run has converged; it returns the mean of the iterates of that stationary window
-/// (Polyak averaging), which removes most of the remaining jitter.
-struct RefinementSettings {
-  std::size_t stages = 3;
-  double step_decay = 0.5;
-  double distance_factor = 3.0;
-  Distance min_distance = Distance::scaled(1e-4);
-};
 
 struct SgdSettings {
   /// m of the paper: source points per mini-batch.

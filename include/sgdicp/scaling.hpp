@@ -45,6 +45,10 @@ class UnitCubeScaling {
   [[nodiscard]] Eigen::Vector3d to_scaled(const Eigen::Vector3d& p) const {
     return (p - offset_) / scale_;
   }
+  /// A stored (single-precision) point, mapped in double.
+  [[nodiscard]] Eigen::Vector3d to_scaled(const Eigen::Vector3f& p) const {
+    return (p.cast<double>() - offset_) / scale_;
+  }
   [[nodiscard]] Eigen::Vector3d to_metric(const Eigen::Vector3d& q) const {
     return scale_ * q + offset_;
   }

@@ -1,0 +1,95 @@
+#pragma once
+// Refinement after the paper's coarse phase (our answer to DESIGN's "central problem",
+// docs/design.md). The paper's single d_max = 0.5 scaled rejects nothing on a large outdoor
+// scene, so its optimum is biased by every non-overlapping point; each time a stage tests
+// stationary (ConvergenceMonitor) the schedule shrinks d_max to a multiple of the median
+// correspondence distance of the stage's last window and multiplies the step size by a decay.
+// When the last stage is stationary the run has converged.
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include "sgdicp/distance.hpp"
+
+namespace sgdicp {
+
+/// Each time a stage is stationary, d_max shrinks to `distance_factor` times the median
+/// correspondence distance of the stage's last window of iterations (never below
+/// `min_distance`; a mini-batch without any pair doubles it again, up to the initial d_max) and
+/// the step size is multiplied by `step_decay`. When the last of these `stages` is stationary
+/// the run has converged; it returns the mean of the iterates of that stationary window
+/// (Polyak averaging), which removes most of the remaining jitter.
+struct RefinementSettings {
+  std::size_t stages = 3;
+  double step_decay = 0.5;
+  double distance_factor = 3.0;
+  Distance min_distance = Distance::scaled(1e-4);
+};
+
+/// The state of the schedule during one run: d_max, the step multiplier, the stage, and the
+/// pair distances of the current and the last completed window. Distances are in scaled units.
+class RefinementSchedule {
+ public:
+  RefinementSchedule(const RefinementSettings& settings, double initial_max_distance,
+                     double min_max_distance, std::size_t pairs_per_window)
+      : settings_(settings),
+        initial_max_distance_(initial_max_distance),
+        min_max_distance_(std::min(initial_max_distance, min_max_distance)),
+        max_distance_(initial_max_distance) {
+    current_window_.reserve(std::min<std::size_t>(pairs_per_window, 1U << 16));
+  }
+
+  /// d_max of the next mini-batch.
+  [[nodiscard]] double max_distance() const noexcept { return max_distance_; }
+  /// Multiplier of the optimiser's step size in this stage.
+  [[nodiscard]] double step_scale() const noexcept { return step_scale_; }
+  /// Refinements done so far (0 = the paper's coarse phase).
+  [[nodiscard]] std::size_t stage() const noexcept { return stage_; }
+  /// Whether a stationary test of this stage ends the run.
+  [[nodiscard]] bool final_stage() const noexcept { return stage_ == settings_.stages; }
+
+  /// Where the mini-batch's pair distances go (the median of a window sets the next d_max).
+  [[nodiscard]] std::vector<float>& pair_distances() noexcept { return current_window_; }
+
+  /// After each mini-batch. A refined d_max can fall below the jitter of the steps (an exact
+  /// copy gives a median pair distance of 0 while Adam still steps ~alpha): a mini-batch
+  /// without pairs widens it again, up to the initial d_max, instead of losing the data.
+  void end_batch(std::size_t pairs) {
+    if (pairs == 0 && max_distance_ < initial_max_distance_) {
+      max_distance_ = std::min(2.0 * max_distance_, initial_max_distance_);
+    }
+  }
+
+  /// At the end of every tested window: its distances are the ones a refinement would use.
+  void end_window() {
+    last_window_.swap(current_window_);
+    current_window_.clear();
+  }
+
+  /// The stage was stationary: tighter correspondences, smaller steps.
+  void refine() {
+    ++stage_;
+    step_scale_ *= settings_.step_decay;
+    const double robust = settings_.distance_factor * median(last_window_);
+    max_distance_ = std::clamp(robust, min_max_distance_, max_distance_);
+  }
+
+ private:
+  static double median(std::vector<float>& values) {
+    if (values.empty()) return 0.0;
+    const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    return static_cast<double>(*mid);
+  }
+
+  RefinementSettings settings_;
+  double initial_max_distance_;
+  double min_max_distance_;
+  double max_distance_;
+  double step_scale_ = 1.0;
+  std::size_t stage_ = 0;
+  std::vector<float> current_window_;
+  std::vector<float> last_window_;
+};
+
+}  // namespace sgdicp

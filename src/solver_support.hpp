@@ -1,0 +1,104 @@
+#pragma once
+// The setup and wrap-up every solver shares (private to the library): the checked source with
+// what its cost needs, the scaling of the pair, the stop of a run and its final statistics.
+#include <chrono>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include <Eigen/Core>
+
+#include "checks.hpp"
+#include "sgdicp/cost.hpp"
+#include "sgdicp/evaluation.hpp"
+#include "sgdicp/features.hpp"
+#include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/point_cloud.hpp"
+#include "sgdicp/preprocessing.hpp"
+#include "sgdicp/result.hpp"
+#include "sgdicp/scaling.hpp"
+
+namespace sgdicp::detail {
+
+/// Wall time since construction.
+class Stopwatch {
+ public:
+  [[nodiscard]] double elapsed_ms() const {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_)
+        .count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+/// The source of a registration, checked, with the covariances plane-to-plane needs estimated
+/// here (and so timed with the registration) when it lacks them.
+class PreparedSource {
+ public:
+  PreparedSource(const PointCloud& source, CostType cost, const NeighborhoodSettings& neighborhood,
+                 std::size_t min_points, const std::string& why_min)
+      : cloud_(&source) {
+    check_source(source, min_points, why_min);
+    if (needs_covariances(cost) && !source.has_covariances()) {
+      with_covariances_ = source;
+      estimate_covariances(*with_covariances_, neighborhood);
+      cloud_ = &*with_covariances_;
+    }
+  }
+  PreparedSource(const PreparedSource&) = delete;
+  PreparedSource& operator=(const PreparedSource&) = delete;
+
+  [[nodiscard]] const PointCloud& cloud() const noexcept { return *cloud_; }
+
+ private:
+  std::optional<PointCloud> with_covariances_;
+  const PointCloud* cloud_;
+};
+
+/// Checks what every solver needs besides the source: a rigid initial transform and the
+/// reference's normals or covariances for the cost.
+inline void check_pair(const ReferenceIndex& reference, CostType cost,
+                       const Eigen::Matrix4d& T_init) {
+  check_initial_transform(T_init);
+  check_reference_features(reference, cost);
+}
+
+/// The paper's map of both clouds into the unit cube (scaling.hpp).
+[[nodiscard]] inline UnitCubeScaling scaling_of(const PointCloud& source,
+                                                const ReferenceIndex& reference,
+                                                ScalingOrigin origin) {
+  return UnitCubeScaling::from_boxes(BoundingBox::of(source), reference.bounding_box(), origin);
+}
+
+/// Ends a run: why it stopped, in the result.
+inline void set_stop(RegistrationResult& result, StopReason reason, std::string message) {
+  result.stop_reason = reason;
+  result.converged = reason == StopReason::converged;
+  result.message = std::move(message);
+}
+
+/// The message of a run that used up its iterations.
+[[nodiscard]] inline std::string iteration_limit_message(std::size_t max_iterations) {
+  return "reached the iteration limit of " + std::to_string(max_iterations) + " before converging";
+}
+
+/// Fills the final statistics of result.T_reference_source and the time of the whole run.
+inline void conclude(RegistrationResult& result, const PointCloud& source,
+                     const ReferenceIndex& reference, double max_distance_m,
+                     const EvaluationSettings& evaluation, const Stopwatch& clock) {
+  result.final_max_distance_m = max_distance_m;
+  evaluate_alignment(source, reference, max_distance_m, evaluation, result);
+  result.time_ms = clock.elapsed_ms();
+}
+
+/// The index of a reference given as a cloud, with what the cost needs (the convenience
+/// overloads of align() and align_batch()).
+[[nodiscard]] inline ReferenceIndex index_for(const PointCloud& reference, CostType cost,
+                                              const NeighborhoodSettings& neighborhood) {
+  ReferenceIndex index(reference);
+  prepare_reference(index, cost, neighborhood);
+  return index;
+}
+
+}  // namespace sgdicp::detail
