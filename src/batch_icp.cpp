@@ -1,20 +1,20 @@
 #include "sgdicp/batch_icp.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
-#include "checks.hpp"
+#include "levenberg_marquardt.hpp"
 #include "sgdicp/error.hpp"
-#include "sgdicp/evaluation.hpp"
-#include "sgdicp/features.hpp"
 #include "sgdicp/scaling.hpp"
+#include "solver_support.hpp"
 
 namespace sgdicp {
 
@@ -90,193 +90,309 @@ Eigen::Matrix4d weighted_rigid_fit(const std::vector<Eigen::Vector3d>& a,
   return t;
 }
 
+// The pairs of an iteration: every source point moved by T with its nearest reference point
+// within d_max, the closest fraction kept when trimming.
+class BatchPairing {
+ public:
+  BatchPairing(const PointCloud& source, const ReferenceIndex& reference, double d_max_m,
+               double trim_ratio)
+      : source_(source),
+        reference_(reference),
+        d_max_sq_m_(static_cast<float>(d_max_m * d_max_m)),
+        trim_ratio_(trim_ratio) {
+    pairs_.reserve(source.size());
+  }
+
+  const std::vector<BatchPair>& pair(const Eigen::Matrix4d& T) {
+    const Eigen::Matrix3f rf = T.topLeftCorner<3, 3>().cast<float>();
+    const Eigen::Vector3f tf = T.topRightCorner<3, 1>().cast<float>();
+    pairs_.clear();
+    for (std::size_t i = 0; i < source_.size(); ++i) {
+      if (const auto nn = reference_.nearest(rf * source_.points[i] + tf, d_max_sq_m_)) {
+        pairs_.push_back({static_cast<std::uint32_t>(i), nn->index, nn->squared_distance});
+      }
+    }
+    if (trim_ratio_ < 1.0 && pairs_.size() >= kMinPairs) trim();
+    return pairs_;
+  }
+
+  static constexpr std::size_t kMinPairs = 6;
+
+ private:
+  void trim() {
+    const auto keep = std::max<std::size_t>(
+        kMinPairs,
+        static_cast<std::size_t>(std::ceil(trim_ratio_ * static_cast<double>(pairs_.size()))));
+    std::nth_element(pairs_.begin(), pairs_.begin() + static_cast<std::ptrdiff_t>(keep - 1),
+                     pairs_.end(), [](const BatchPair& a, const BatchPair& b) {
+                       return a.squared_distance < b.squared_distance;
+                     });
+    pairs_.resize(keep);
+  }
+
+  const PointCloud& source_;
+  const ReferenceIndex& reference_;
+  float d_max_sq_m_;
+  double trim_ratio_;
+  std::vector<BatchPair> pairs_;
+};
+
+// The exponential map of a left perturbation (w, v): rotation exp([w]x), translation v.
+Eigen::Matrix4d increment_of(const PoseVector& step) {
+  Eigen::Matrix4d delta = Eigen::Matrix4d::Identity();
+  const double angle = step.head<3>().norm();
+  if (angle > 0.0) {
+    delta.topLeftCorner<3, 3>() =
+        Eigen::AngleAxisd(angle, step.head<3>() / angle).toRotationMatrix();
+  }
+  delta.topRightCorner<3, 1>() = step.tail<3>();
+  return delta;
+}
+
+// The Gauss-Newton system of sum rho(e^T Omega e) over the pairs at T, with the pose perturbed
+// on the left, q' = exp(w) q + v: dq/d(w, v) = [-[q]x | I]. Pairs and Omega stay fixed during
+// the step.
+class GaussNewtonSystem {
+ public:
+  GaussNewtonSystem(const std::vector<BatchPair>& pairs, const PointCloud& source,
+                    const PointCloud& reference, const Eigen::Matrix4d& T,
+                    const BatchSettings& settings, double kernel_scale_m)
+      : settings_(settings), kernel_scale_m_(kernel_scale_m) {
+    const Eigen::Matrix3d rotation = T.topLeftCorner<3, 3>();
+    const Eigen::Vector3d translation = T.topRightCorner<3, 1>();
+    terms_.reserve(pairs.size());
+    for (const auto& p : pairs) {
+      const Eigen::Vector3d q =
+          rotation * source.points[p.source_index].cast<double>() + translation;
+      const Eigen::Vector3d r = reference.points[p.reference_index].cast<double>();
+      const Eigen::Matrix3d omega = information_matrix(
+          settings.cost,
+          reference.has_normals() ? reference.normals[p.reference_index] : Eigen::Vector3f::Zero(),
+          reference.has_covariances() ? reference.covariances[p.reference_index]
+                                      : Eigen::Matrix3f::Identity(),
+          source.has_covariances() ? source.covariances[p.source_index]
+                                   : Eigen::Matrix3f::Identity(),
+          rotation);
+      add(q, r, omega);
+    }
+  }
+
+  // Solves (H + (lambda + 1e-12) D) x = -b with D the mean diagonal of H: the damped step.
+  [[nodiscard]] PoseVector step(double lambda) const {
+    const double mean_diagonal = h_.trace() / 6.0;
+    PoseMatrix damped = h_;
+    damped.diagonal().array() += lambda * mean_diagonal + 1e-12 * mean_diagonal;
+    return -damped.ldlt().solve(b_);
+  }
+  [[nodiscard]] double cost() const noexcept { return cost_; }
+  // Whether the weighted pairs constrain the pose at all.
+  [[nodiscard]] bool informative() const { return h_.trace() > 0.0; }
+  // The cost after moving every paired source point by the increment of `step`.
+  [[nodiscard]] double cost_after(const PoseVector& step) const {
+    const Eigen::Matrix4d delta = increment_of(step);
+    double c = 0.0;
+    for (const auto& term : terms_) {
+      const Eigen::Vector3d e =
+          delta.topLeftCorner<3, 3>() * term.q + delta.topRightCorner<3, 1>() - term.r;
+      c += kernel_rho(settings_.kernel, e.dot(term.omega * e), kernel_scale_m_);
+    }
+    return c;
+  }
+
+ private:
+  void add(const Eigen::Vector3d& q, const Eigen::Vector3d& r, const Eigen::Matrix3d& omega) {
+    const Eigen::Vector3d e = q - r;
+    const double s = e.dot(omega * e);
+    const double w = kernel_weight(settings_.kernel, s, kernel_scale_m_);
+    PoseJacobianMatrix j;
+    j.leftCols<3>() = -skew(q);
+    j.rightCols<3>().setIdentity();
+    h_.noalias() += w * j.transpose() * omega * j;
+    b_.noalias() += w * j.transpose() * (omega * e);
+    cost_ += kernel_rho(settings_.kernel, s, kernel_scale_m_);
+    terms_.push_back({q, r, omega});
+  }
+
+  struct Term {
+    Eigen::Vector3d q, r;
+    Eigen::Matrix3d omega;
+  };
+  const BatchSettings& settings_;
+  double kernel_scale_m_;
+  std::vector<Term> terms_;
+  PoseMatrix h_ = PoseMatrix::Zero();
+  PoseVector b_ = PoseVector::Zero();
+  double cost_ = 0.0;
+};
+
+// One iteration's increment and what it says about convergence.
+struct BatchStep {
+  Eigen::Matrix4d delta = Eigen::Matrix4d::Identity();
+  // The step the data asks for: the increment itself for the closed form, the (undamped)
+  // Gauss-Newton step for the iterative costs. Convergence is judged on it, so that a step
+  // that is small only because it is heavily damped does not count.
+  Eigen::Matrix4d full_step = Eigen::Matrix4d::Identity();
+  bool descended = true;    // false: no damping lowered the cost
+  bool informative = true;  // false: no pair carries weight (every kernel weight is 0)
+};
+
+// One batch ICP run in metres: pair all, step, until the step the data asks for is small.
+class BatchRun {
+ public:
+  BatchRun(const PointCloud& source, const ReferenceIndex& reference, const BatchSettings& settings,
+           double scale_m)
+      : source_(source),
+        reference_(reference),
+        settings_(settings),
+        scale_m_(scale_m),
+        d_max_m_(settings.max_correspondence_distance.to_scaled(scale_m) * scale_m),
+        kernel_scale_m_(settings.kernel_scale.to_scaled(scale_m) * scale_m),
+        pairing_(source, reference, d_max_m_, settings.trim_ratio),
+        damping_(settings.initial_damping) {}
+
+  [[nodiscard]] double max_distance_m() const noexcept { return d_max_m_; }
+
+  Eigen::Matrix4d minimise(Eigen::Matrix4d T, RegistrationResult& result) {
+    for (std::size_t it = 0; it < settings_.max_iterations; ++it) {
+      const std::vector<BatchPair>& pairs = pairing_.pair(T);
+      result.iterations = it + 1;
+      result.points_processed += source_.size();
+      if (pairs.size() < BatchPairing::kMinPairs) {
+        detail::set_stop(result, StopReason::no_correspondences,
+                         "fewer than 6 source points had a reference point within d_max = " +
+                             std::to_string(d_max_m_) + " m");
+        return T;
+      }
+      const BatchStep step = settings_.cost == CostType::point_to_point
+                                 ? closed_form_step(pairs, T)
+                                 : levenberg_marquardt_step(pairs, T);
+      T = step.delta * T;
+      record(pairs, T, result);
+      if (const auto stop = stop_after(T, step)) {
+        detail::set_stop(result, stop->first, stop->second);
+        return T;
+      }
+    }
+    detail::set_stop(result, StopReason::max_iterations,
+                     detail::iteration_limit_message(settings_.max_iterations));
+    return T;
+  }
+
+ private:
+  // Point-to-point in closed form: IRLS weights from the kernel, then the best rigid fit.
+  BatchStep closed_form_step(const std::vector<BatchPair>& pairs, const Eigen::Matrix4d& T) {
+    const Eigen::Matrix3d rotation = T.topLeftCorner<3, 3>();
+    const Eigen::Vector3d translation = T.topRightCorner<3, 1>();
+    moved_.clear();
+    target_.clear();
+    weights_.clear();
+    const PointCloud& ref = reference_.cloud();
+    for (const auto& p : pairs) {
+      moved_.push_back(rotation * source_.points[p.source_index].cast<double>() + translation);
+      target_.push_back(ref.points[p.reference_index].cast<double>());
+      weights_.push_back(kernel_weight(settings_.kernel, p.squared_distance, kernel_scale_m_));
+    }
+    BatchStep step;
+    step.informative =
+        std::any_of(weights_.begin(), weights_.end(), [](double w) { return w > 0.0; });
+    if (!step.informative) return step;
+    step.delta = weighted_rigid_fit(moved_, target_, weights_);
+    step.full_step = step.delta;
+    return step;
+  }
+
+  // One Levenberg-Marquardt step (levenberg_marquardt.hpp).
+  BatchStep levenberg_marquardt_step(const std::vector<BatchPair>& pairs,
+                                     const Eigen::Matrix4d& T) {
+    const GaussNewtonSystem system(pairs, source_, reference_.cloud(), T, settings_,
+                                   kernel_scale_m_);
+    BatchStep result;
+    result.informative = system.informative();
+    if (!result.informative) return result;
+    result.full_step = increment_of(system.step(0.0));
+    const std::optional<PoseVector> step = damping_.descend(system);
+    result.descended = step.has_value();
+    if (step) result.delta = increment_of(*step);
+    return result;
+  }
+
+  void record(const std::vector<BatchPair>& pairs, const Eigen::Matrix4d& T,
+              RegistrationResult& result) const {
+    if (!settings_.record_trace) return;
+    // The mean squared pair distance before this step stands for the SGD trace's mini-batch
+    // cost; a batch step is always a full one (step size 1).
+    double sum_sq = 0.0;
+    for (const auto& p : pairs) sum_sq += p.squared_distance;
+    result.trace.push_back({result.iterations, result.points_processed, orthonormalized(T), 1.0,
+                            d_max_m_, pairs.size(),
+                            sum_sq / static_cast<double>(pairs.size()) / (scale_m_ * scale_m_)});
+  }
+
+  [[nodiscard]] bool small(const Eigen::Matrix4d& increment) const {
+    const double moved_t = increment.topRightCorner<3, 1>().norm() / scale_m_;
+    const double moved_r =
+        Eigen::AngleAxisd(Eigen::Matrix3d(increment.topLeftCorner<3, 3>())).angle();
+    return moved_t < settings_.translation_tolerance && moved_r < settings_.rotation_tolerance;
+  }
+
+  // Why the run stops after this step, if it does.
+  [[nodiscard]] std::optional<std::pair<StopReason, std::string>> stop_after(
+      const Eigen::Matrix4d& T, const BatchStep& step) const {
+    if (!step.informative) {
+      return {{StopReason::no_correspondences,
+               "no pair carries any weight under the robust kernel (kernel scale too small for "
+               "these residuals?)"}};
+    }
+    if (!T.allFinite()) return {{StopReason::diverged, "the pose became non-finite"}};
+    if (small(step.full_step)) return {{StopReason::converged, "converged"}};
+    if (!step.descended) {
+      return {{StopReason::no_descent,
+               "no damped Gauss-Newton step lowered the cost (damping raised " +
+                   std::to_string(detail::LevenbergMarquardt::kAttempts) +
+                   " times) while the undamped step is still larger than the tolerances"}};
+    }
+    return std::nullopt;
+  }
+
+  const PointCloud& source_;
+  const ReferenceIndex& reference_;
+  const BatchSettings& settings_;
+  double scale_m_;
+  double d_max_m_;
+  double kernel_scale_m_;
+  BatchPairing pairing_;
+  detail::LevenbergMarquardt damping_;
+  std::vector<Eigen::Vector3d> moved_, target_;
+  std::vector<double> weights_;
+};
+
 }  // namespace
 
 RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& reference,
                                const BatchSettings& settings, const Eigen::Matrix4d& T_init) {
-  const auto start = std::chrono::steady_clock::now();
+  const detail::Stopwatch clock;
   settings.validate();
-  detail::check_source(source, 6, "the minimum of");
-  detail::check_initial_transform(T_init);
-  check_reference_features(reference, settings.cost);
-  std::optional<PointCloud> source_with_features;
-  if (needs_covariances(settings.cost) && !source.has_covariances()) {
-    source_with_features = source;
-    estimate_covariances(*source_with_features, settings.neighborhood);
-  }
-  const PointCloud& src = source_with_features ? *source_with_features : source;
-  const PointCloud& ref = reference.cloud();
-
-  const double k =
-      UnitCubeScaling::from_boxes(BoundingBox::of(src), reference.bounding_box()).scale();
-  const double d_max = settings.max_correspondence_distance.to_scaled(k) * k;  // metres
-  const auto d_max_sq = static_cast<float>(d_max * d_max);
-  const double kernel_scale = settings.kernel_scale.to_scaled(k) * k;  // metres
+  detail::check_pair(reference, settings.cost, T_init);
+  const detail::PreparedSource src(source, settings.cost, settings.neighborhood,
+                                   BatchPairing::kMinPairs, "the minimum of");
+  const double scale_m =
+      detail::scaling_of(src.cloud(), reference, ScalingOrigin::lower_corner).scale();
 
   RegistrationResult result;
-  result.scale_m = k;
-  result.final_max_distance_m = d_max;
-  Eigen::Matrix4d T = orthonormalized(T_init);
-  double lambda_scale = settings.initial_damping;
-
-  std::vector<BatchPair> pairs;
-  pairs.reserve(src.size());
-  std::vector<Eigen::Vector3d> moved, target;
-  std::vector<double> weights;
-  bool stopped = false;
-  for (std::size_t it = 0; it < settings.max_iterations && !stopped; ++it) {
-    // Pair every source point with its nearest reference point within d_max.
-    const Eigen::Matrix3f rf = T.topLeftCorner<3, 3>().cast<float>();
-    const Eigen::Vector3f tf = T.topRightCorner<3, 1>().cast<float>();
-    pairs.clear();
-    for (std::size_t i = 0; i < src.size(); ++i) {
-      if (const auto nn = reference.nearest(rf * src.points[i] + tf, d_max_sq)) {
-        pairs.push_back({static_cast<std::uint32_t>(i), nn->index, nn->squared_distance});
-      }
-    }
-    result.iterations = it + 1;
-    result.points_processed += src.size();
-    if (pairs.size() < 6) {
-      result.stop_reason = StopReason::no_correspondences;
-      result.message = "fewer than 6 source points had a reference point within d_max = " +
-                       std::to_string(d_max) + " m";
-      stopped = true;
-      break;
-    }
-    if (settings.trim_ratio < 1.0) {
-      const auto keep = std::max<std::size_t>(
-          6, static_cast<std::size_t>(
-                 std::ceil(settings.trim_ratio * static_cast<double>(pairs.size()))));
-      std::nth_element(pairs.begin(), pairs.begin() + static_cast<std::ptrdiff_t>(keep - 1),
-                       pairs.end(), [](const BatchPair& a, const BatchPair& b) {
-                         return a.squared_distance < b.squared_distance;
-                       });
-      pairs.resize(keep);
-    }
-
-    const Eigen::Matrix3d rotation = T.topLeftCorner<3, 3>();
-    const Eigen::Vector3d translation = T.topRightCorner<3, 1>();
-    Eigen::Matrix4d delta = Eigen::Matrix4d::Identity();
-    if (settings.cost == CostType::point_to_point) {
-      // Closed form: IRLS weights from the kernel, then the best rigid fit of the pairs.
-      moved.clear();
-      target.clear();
-      weights.clear();
-      for (const auto& p : pairs) {
-        moved.push_back(rotation * src.points[p.source_index].cast<double>() + translation);
-        target.push_back(ref.points[p.reference_index].cast<double>());
-        weights.push_back(kernel_weight(settings.kernel, p.squared_distance, kernel_scale));
-      }
-      delta = weighted_rigid_fit(moved, target, weights);
-    } else {
-      // One Levenberg-Marquardt step with the pose perturbed on the left, q' = exp(w) q + v:
-      // dq/d(w, v) = [-[q]x | I]. The pairs and Omega stay fixed during the step.
-      struct Term {
-        Eigen::Vector3d q, r;
-        Eigen::Matrix3d omega;
-      };
-      std::vector<Term> terms;
-      terms.reserve(pairs.size());
-      PoseMatrix h = PoseMatrix::Zero();
-      PoseVector b = PoseVector::Zero();
-      double cost = 0.0;
-      for (const auto& p : pairs) {
-        const Eigen::Vector3d q =
-            rotation * src.points[p.source_index].cast<double>() + translation;
-        const Eigen::Vector3d r = ref.points[p.reference_index].cast<double>();
-        const Eigen::Matrix3d omega = information_matrix(
-            settings.cost,
-            ref.has_normals() ? ref.normals[p.reference_index] : Eigen::Vector3f::Zero(),
-            ref.has_covariances() ? ref.covariances[p.reference_index]
-                                  : Eigen::Matrix3f::Identity(),
-            src.has_covariances() ? src.covariances[p.source_index] : Eigen::Matrix3f::Identity(),
-            rotation);
-        const Eigen::Vector3d e = q - r;
-        const double s = e.dot(omega * e);
-        const double w = kernel_weight(settings.kernel, s, kernel_scale);
-        PoseJacobianMatrix j;
-        j.leftCols<3>() = -skew(q);
-        j.rightCols<3>().setIdentity();
-        h.noalias() += w * j.transpose() * omega * j;
-        b.noalias() += w * j.transpose() * (omega * e);
-        cost += kernel_rho(settings.kernel, s, kernel_scale);
-        terms.push_back({q, r, omega});
-      }
-      const double mean_diagonal = h.trace() / 6.0;
-      const auto cost_after = [&](const Eigen::Matrix4d& d) {
-        double c = 0.0;
-        for (const auto& term : terms) {
-          const Eigen::Vector3d e =
-              d.topLeftCorner<3, 3>() * term.q + d.topRightCorner<3, 1>() - term.r;
-          c += kernel_rho(settings.kernel, e.dot(term.omega * e), kernel_scale);
-        }
-        return c;
-      };
-      // Raise the damping until the step lowers the cost (at most 10 tries).
-      for (int attempt = 0; attempt < 10; ++attempt) {
-        PoseMatrix damped = h;
-        damped.diagonal().array() += lambda_scale * mean_diagonal + 1e-12 * mean_diagonal;
-        const PoseVector step = -damped.ldlt().solve(b);
-        Eigen::Matrix4d candidate = Eigen::Matrix4d::Identity();
-        const double angle = step.head<3>().norm();
-        if (angle > 0.0) {
-          candidate.topLeftCorner<3, 3>() =
-              Eigen::AngleAxisd(angle, step.head<3>() / angle).toRotationMatrix();
-        }
-        candidate.topRightCorner<3, 1>() = step.tail<3>();
-        if (lambda_scale == 0.0 || cost_after(candidate) <= cost) {
-          delta = candidate;
-          lambda_scale = std::max(lambda_scale * 0.1, settings.initial_damping > 0 ? 1e-12 : 0.0);
-          break;
-        }
-        lambda_scale = std::max(lambda_scale * 10.0, 1e-9);
-      }
-    }
-    T = delta * T;
-    if (settings.record_trace) {
-      // The mean squared pair distance before this step stands for the SGD trace's mini-batch
-      // cost; a batch step is always a full one (step size 1).
-      double sum_sq = 0.0;
-      for (const auto& p : pairs) sum_sq += p.squared_distance;
-      result.trace.push_back({result.iterations, result.points_processed, orthonormalized(T), 1.0,
-                              d_max, pairs.size(),
-                              sum_sq / static_cast<double>(pairs.size()) / (k * k)});
-    }
-    const double moved_t = delta.topRightCorner<3, 1>().norm() / k;
-    const double moved_r = Eigen::AngleAxisd(Eigen::Matrix3d(delta.topLeftCorner<3, 3>())).angle();
-    if (!T.allFinite()) {
-      result.stop_reason = StopReason::diverged;
-      result.message = "the pose became non-finite";
-      stopped = true;
-      break;
-    }
-    if (moved_t < settings.translation_tolerance && moved_r < settings.rotation_tolerance) {
-      result.stop_reason = StopReason::converged;
-      result.converged = true;
-      result.message = "converged";
-      stopped = true;
-    }
-  }
-  if (!stopped) {
-    result.stop_reason = StopReason::max_iterations;
-    result.message = "reached the iteration limit of " + std::to_string(settings.max_iterations) +
-                     " before converging";
-  }
-  result.T_reference_source = orthonormalized(T);
-  evaluate_alignment(src, reference, d_max,
-                     EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
-                     result);
-  result.time_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  result.scale_m = scale_m;
+  BatchRun run(src.cloud(), reference, settings, scale_m);
+  result.T_reference_source = orthonormalized(run.minimise(orthonormalized(T_init), result));
+  detail::conclude(result, src.cloud(), reference, run.max_distance_m(),
+                   EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
+                   clock);
   return result;
 }
 
 RegistrationResult align_batch(const PointCloud& source, const PointCloud& reference,
                                const BatchSettings& settings, const Eigen::Matrix4d& T_init) {
   settings.validate();
-  ReferenceIndex index(reference);
-  prepare_reference(index, settings.cost, settings.neighborhood);
-  return align_batch(source, index, settings, T_init);
+  return align_batch(source, detail::index_for(reference, settings.cost, settings.neighborhood),
+                     settings, T_init);
 }
 
 }  // namespace sgdicp

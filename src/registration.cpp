@@ -23,6 +23,8 @@ std::string_view to_string(StopReason reason) {
       return "no_correspondences";
     case StopReason::diverged:
       return "diverged";
+    case StopReason::no_descent:
+      return "no_descent";
   }
   return "?";
 }

@@ -251,3 +251,43 @@ TEST(ReferenceFeatures, MissingNormalsAreAClearError) {
 
 }  // namespace
 }  // namespace sgdicp
+
+namespace sgdicp {
+namespace {
+
+// A step that is small only because it is heavily damped is not convergence: with an initial
+// damping of 100 the first Levenberg-Marquardt steps barely move, but the undamped step is still
+// large, so the run goes on (the damping falls after every accepted step) and reaches the same
+// answer as with the default damping.
+TEST(BatchConvergence, AHeavilyDampedStepIsNotConvergence) {
+  const Eigen::Matrix4d T_gt = make_transform(0, 0, 8 * kDeg, {0.1, -0.05, 0.02});
+  const PointCloud source = synthetic_scene(45, 20000);
+  ReferenceIndex reference(transformed(synthetic_scene(46, 20000), T_gt));
+  prepare_reference(reference, CostType::point_to_plane);
+  BatchSettings damped = BatchSettings::icp_plane();
+  damped.initial_damping = 100.0;
+  const RegistrationResult r = align_batch(source, reference, damped);
+  const RegistrationResult usual = align_batch(source, reference, BatchSettings::icp_plane());
+  ASSERT_TRUE(usual.converged) << usual.message;
+  EXPECT_TRUE(r.converged) << r.message;
+  EXPECT_GT(r.iterations, 3U);
+  EXPECT_LT(translation_error(r.T_reference_source, usual.T_reference_source), 1e-3);
+}
+
+// A kernel so narrow that every pair's weight underflows to 0 leaves no information about the
+// pose: reported as such, not as convergence at the unmoved pose.
+TEST(BatchConvergence, PairsWithoutWeightAreNotConvergence) {
+  const Eigen::Matrix4d T_gt = make_transform(0, 0, 8 * kDeg, {0.1, -0.05, 0.02});
+  const PointCloud source = synthetic_scene(47, 20000);
+  ReferenceIndex reference(transformed(synthetic_scene(48, 20000), T_gt));
+  BatchSettings s = BatchSettings::icp();
+  s.kernel = KernelType::welsch;
+  s.kernel_scale = Distance::scaled(1e-6);
+  const RegistrationResult r = align_batch(source, reference, s);
+  EXPECT_FALSE(r.converged);
+  EXPECT_EQ(r.stop_reason, StopReason::no_correspondences) << r.message;
+  EXPECT_EQ(r.iterations, 1U);
+}
+
+}  // namespace
+}  // namespace sgdicp

@@ -159,3 +159,64 @@ TEST(Optimizer, RejectsAbsurdSettings) {
 
 }  // namespace
 }  // namespace sgdicp
+
+// Levenberg's damping on systems whose answer is known (src/levenberg_marquardt.hpp).
+#include "levenberg_marquardt.hpp"
+
+namespace sgdicp {
+namespace {
+
+// A one-dimensional cost along the first coordinate; the step for damping lambda is
+// -g / (h (1 + lambda)), and the true cost after it is given by `cost_of`.
+template <typename Cost>
+struct LineSystem {
+  double g, h;
+  Cost cost_of;
+  [[nodiscard]] PoseVector step(double lambda) const {
+    PoseVector s = PoseVector::Zero();
+    s[0] = -g / (h * (1.0 + lambda));
+    return s;
+  }
+  [[nodiscard]] double cost() const { return cost_of(0.0); }
+  [[nodiscard]] double cost_after(const PoseVector& s) const { return cost_of(s[0]); }
+};
+template <typename Cost>
+LineSystem(double, double, Cost) -> LineSystem<Cost>;
+
+TEST(LevenbergMarquardt, AcceptsADescentStepAndRelaxesTheDamping) {
+  // The quadratic (x - 1)^2: the Gauss-Newton step from 0 is exact.
+  const LineSystem quadratic{-2.0, 2.0, [](double x) { return (x - 1.0) * (x - 1.0); }};
+  detail::LevenbergMarquardt lm(1e-3);
+  const auto step = lm.descend(quadratic);
+  ASSERT_TRUE(step.has_value());
+  EXPECT_NEAR((*step)[0], 1.0 / (1.0 + 1e-3), 1e-12);
+  EXPECT_DOUBLE_EQ(lm.damping(), 1e-4);
+}
+
+TEST(LevenbergMarquardt, RaisesTheDampingUntilTheCostFalls) {
+  // The model over-shoots: only steps shorter than 0.05 lower this cost.
+  const LineSystem steep{-2.0, 2.0, [](double x) { return x < 0.05 ? -x : 1.0; }};
+  detail::LevenbergMarquardt lm(1e-3);
+  const auto step = lm.descend(steep);
+  ASSERT_TRUE(step.has_value());
+  EXPECT_LT((*step)[0], 0.05);
+  EXPECT_GT(lm.damping(), 1.0);  // raised to 100 (step 1/101), then relaxed once
+}
+
+TEST(LevenbergMarquardt, ReportsWhenNoDampingLowersTheCost) {
+  const LineSystem uphill{-2.0, 2.0, [](double x) { return x > 0.0 ? 1.0 : 0.0; }};
+  detail::LevenbergMarquardt lm(1e-3);
+  EXPECT_FALSE(lm.descend(uphill).has_value());
+}
+
+TEST(LevenbergMarquardt, ZeroDampingIsPlainGaussNewton) {
+  const LineSystem uphill{-2.0, 2.0, [](double x) { return x > 0.0 ? 1.0 : 0.0; }};
+  detail::LevenbergMarquardt lm(0.0);
+  const auto step = lm.descend(uphill);
+  ASSERT_TRUE(step.has_value());
+  EXPECT_DOUBLE_EQ((*step)[0], 1.0);
+  EXPECT_EQ(lm.damping(), 0.0);
+}
+
+}  // namespace
+}  // namespace sgdicp

@@ -15,6 +15,7 @@ enum class StopReason {
   max_iterations,      ///< the iteration limit was reached first
   no_correspondences,  ///< a whole window of mini-batches found no pair within d_max
   diverged,            ///< the pose became non-finite or left the scaled space far behind
+  no_descent,  ///< batch Levenberg-Marquardt: no damping lowered the cost before convergence
 };
 [[nodiscard]] std::string_view to_string(StopReason reason);
 
