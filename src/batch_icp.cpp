@@ -13,42 +13,10 @@
 #include "checks.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/evaluation.hpp"
-#include "sgdicp/features.hpp"
+#include "sgdicp/preprocessing.hpp"
 #include "sgdicp/scaling.hpp"
 
 namespace sgdicp {
-
-BatchSettings BatchSettings::icp() {
-  return BatchSettings{};
-}
-
-BatchSettings BatchSettings::icp_plane() {
-  BatchSettings s;
-  s.cost = CostType::point_to_plane;
-  return s;
-}
-
-BatchSettings BatchSettings::gicp() {
-  BatchSettings s;
-  s.cost = CostType::plane_to_plane;
-  return s;
-}
-
-void BatchSettings::validate() const {
-  detail::require_positive(max_correspondence_distance.value, "max correspondence distance");
-  detail::require_positive(kernel_scale.value, "kernel scale");
-  if (!(trim_ratio > 0.0 && trim_ratio <= 1.0)) {
-    throw InvalidSettingsError("trim ratio must be in (0, 1]");
-  }
-  if (max_iterations == 0) throw InvalidSettingsError("max iterations must be at least 1");
-  if (!(translation_tolerance >= 0.0) || !(rotation_tolerance >= 0.0) ||
-      !std::isfinite(translation_tolerance) || !std::isfinite(rotation_tolerance)) {
-    throw InvalidSettingsError("tolerances must be finite and non-negative");
-  }
-  if (!(initial_damping >= 0.0) || !std::isfinite(initial_damping)) {
-    throw InvalidSettingsError("initial damping must be finite and non-negative");
-  }
-}
 
 namespace {
 
@@ -98,7 +66,7 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   settings.validate();
   detail::check_source(source, 6, "the minimum of");
   detail::check_initial_transform(T_init);
-  check_reference_features(reference, settings.cost);
+  check_reference_prepared(reference, settings.cost);
   std::optional<PointCloud> source_with_features;
   if (needs_covariances(settings.cost) && !source.has_covariances()) {
     source_with_features = source;

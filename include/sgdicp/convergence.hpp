@@ -1,6 +1,6 @@
 #pragma once
-// When has a stochastic run stopped improving? (DESIGN "Convergence".) Raw SGD steps never reach
-// zero, so a threshold on single steps either stops too early or never, and tests on the
+// When has a stochastic run stopped improving? (docs/design.md, "Convergence".) Raw SGD steps never
+// reach zero, so a threshold on single steps either stops too early or never, and tests on the
 // iterates are fooled by their autocorrelation at small step sizes. We test the mini-batch
 // gradients instead, which are nearly independent from batch to batch whatever the optimiser.
 // Over a window of W iterations, a stage is stationary when the mean gradient is not
@@ -39,6 +39,7 @@ struct ConvergenceSettings {
   double translation_tolerance = 1e-6;
   /// ... and the angles less than this (sum of |d roll|, |d pitch|, |d yaw|, rad) is stationary.
   double rotation_tolerance = 1e-6;
+  bool operator==(const ConvergenceSettings&) const = default;
 };
 
 class ConvergenceMonitor {
