@@ -198,8 +198,13 @@ void add_settings_options(CLI::App& app, SettingsOptions& o) {
   for (const auto& s : sgd_settings_table()) {
     if (s.keyword_only) continue;
     const std::string name(s.name);
+    // The paper's symbols as short options: -m for the mini-batch size, -d for d_max.
+    const std::string short_name = name == "batch-size"     ? "-m,"
+                                   : name == "max-distance" ? "-d,"
+                                                            : "";
     app.add_option_function<std::string>(
-           "--" + name, [&o, name](const std::string& text) { o.values[name] = text; }, help_of(s))
+           short_name + "--" + name, [&o, name](const std::string& text) { o.values[name] = text; },
+           help_of(s))
         ->type_name(type_name_of(s));
   }
 }
