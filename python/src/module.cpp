@@ -332,7 +332,7 @@ ReadPoints read_points_with_info(const std::filesystem::path& path, const py::ha
 
 // ---- docstrings
 
-constexpr const char* kRegisterDoc =
+constexpr const char* kRegisterDocTemplate =
     R"doc(Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
 Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
@@ -360,24 +360,14 @@ method : str, default 'sgd'
     plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
     error). An unknown name raises InvalidSettingsError.
 **overrides
-    Flat keyword settings applied on top of `settings`, named like the CLI's options. For the
-    batch methods: max_distance (0.05) and kernel_scale (0.01) with max_distance_unit,
-    max_iterations (100), kernel ('none'), trim (1), neighbors (20), damping (1e-6: the initial
-    Levenberg-Marquardt damping), translation_tolerance (1e-5, scaled units), rotation_tolerance
-    (1e-5, rad), evaluation_points (2000), check_degeneracy (True), record_trace (False); any
-    other raises TypeError.
+    Flat keyword settings applied on top of `settings`, named like the CLI's options (the
+    library's settings table), each with its default and valid range. A distance given as a number
+    is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
+    optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
+    For the batch methods (any other keyword raises TypeError):
+@BATCH@.
     For the SGD methods:
-    batch_size (160), optimizer ('adam'; also sets learning_rate to that rule's usual value:
-    sgd 2, momentum 2 * (1 - momentum), adam/rmsprop 0.01, gauss-newton 1), learning_rate (0.01,
-    scaled units), max_distance (0.5), min_distance (1e-4) and kernel_scale (0.01) with
-    max_distance_unit ('scaled' or 'm'; a Distance keeps its own unit), max_iterations (4000),
-    seed (2019), momentum (0.9), beta1 (0.9), beta2 (0.999), rms_decay (0.9), epsilon (1e-8),
-    hessian_decay (0.9), damping (1e-3), window (20), chi2 (12.59), path_efficiency (0.5),
-    translation_tolerance (1e-6, scaled units), rotation_tolerance (1e-6, rad),
-    refine_stages (3), step_decay (0.5), distance_factor (3), average (True),
-    scaling_origin ('center'), cost ('point-to-point'; or 'point-to-plane', 'plane-to-plane'),
-    kernel ('none'; or 'huber', 'cauchy', 'geman-mcclure', 'welsch'), trim (1), neighbors (20),
-    check_degeneracy (True), evaluation_points (2000), record_trace (False).
+@SGD@.
     See docs/python.md for the settings each one sets.
 
 The GIL is released during the registration (and the KD-tree build), so registrations in
@@ -394,6 +384,17 @@ InvalidSettingsError (ValueError)
 TypeError
     An unknown keyword, a keyword of the other solver, or a value of the wrong type.
 )doc";
+
+// kRegisterDocTemplate with the keyword lists of both solvers filled in.
+std::string register_doc(const py::module_& m) {
+  std::string doc = kRegisterDocTemplate;
+  const auto fill = [&](const std::string& marker, const std::string& text) {
+    doc.replace(doc.find(marker), marker.size(), text);
+  };
+  fill("@BATCH@", keyword_summary(m, Solver::batch, "    "));
+  fill("@SGD@", keyword_summary(m, Solver::sgd, "    "));
+  return doc;
+}
 
 void bind_reference_index(py::module_& m) {
   py::class_<SharedIndex, std::shared_ptr<SharedIndex>>(
@@ -523,8 +524,10 @@ void bind_results(py::module_& m) {
 }
 
 void bind_register_and_io(py::module_& m) {
-  m.def("register", &register_clouds, kRegisterDoc, "source"_a, "reference"_a,
-        "init"_a = py::none(), "settings"_a = py::none(), "method"_a = "sgd");
+  // The keyword lists come from the settings table; the docstring must outlive the module.
+  static const std::string doc = register_doc(m);
+  m.def("register", &register_clouds, doc.c_str(), "source"_a, "reference"_a, "init"_a = py::none(),
+        "settings"_a = py::none(), "method"_a = "sgd");
 
   py::class_<ReadPoints>(m, "ReadResult", "A point cloud read from a file, with its counts.")
       .def_readonly("points", &ReadPoints::points,
