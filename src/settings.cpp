@@ -276,7 +276,8 @@ Setting<S> optimizer_setting() {
   return s;
 }
 
-std::vector<Setting<S>> make_sgd_table() {
+// The step rule and the mini-batch (the first: "optimizer" sets the learning rate).
+std::vector<Setting<S>> step_settings() {
   return {
       optimizer_setting(),
       setting<S, &S::optimizer, &O::learning_rate>(
@@ -319,6 +320,12 @@ std::vector<Setting<S>> make_sgd_table() {
           {"damping", "optimizer.damping", kDamping, "",
            "Gauss-Newton step: Levenberg damping, relative to the mean diagonal of the averaged "
            "matrix (batch methods: the initial Levenberg-Marquardt damping)"}),
+  };
+}
+
+// When a stage, and the run, stop.
+std::vector<Setting<S>> stop_settings() {
+  return {
       setting<S, &S::convergence, &C::window>(
           {"window",
            "convergence.window",
@@ -371,6 +378,12 @@ std::vector<Setting<S>> make_sgd_table() {
       setting<S, &S::refinement, &R::min_distance>({"min-distance", "refinement.min_distance",
                                                     kScaledRange, "",
                                                     "Refinement: lower bound of d_max"}),
+  };
+}
+
+// What is returned, and how pairs are weighed.
+std::vector<Setting<S>> result_and_pair_settings() {
+  return {
       setting<S, &S::average_iterates>(
           {"average",
            "average_iterates",
@@ -398,6 +411,14 @@ std::vector<Setting<S>> make_sgd_table() {
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
   };
+}
+
+std::vector<Setting<S>> make_sgd_table() {
+  std::vector<Setting<S>> table = step_settings();
+  for (auto part : {stop_settings(), result_and_pair_settings()}) {
+    table.insert(table.end(), part.begin(), part.end());
+  }
+  return table;
 }
 
 std::vector<Setting<B>> make_batch_table() {

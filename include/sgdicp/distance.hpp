@@ -19,7 +19,12 @@ struct Distance {
   [[nodiscard]] double to_scaled(double metres_per_unit) const {
     return unit == Unit::scaled ? value : value / metres_per_unit;
   }
-  bool operator==(const Distance&) const = default;
+  /// The value in metres, given the metres per scaled unit.
+  [[nodiscard]] double to_metres(double metres_per_unit) const {
+    return unit == Unit::metres ? value : value * metres_per_unit;
+  }
+
+  friend bool operator==(const Distance&, const Distance&) = default;
 };
 
 inline constexpr std::array<EnumName<Distance::Unit>, 4> kDistanceUnitNames{{
