@@ -35,7 +35,6 @@ struct BenchOptions {
   std::size_t threads = 1;
   std::string csv;
   std::vector<std::string> success = {"0.05,1", "2,5"};
-  bool json = false;
   SettingsOptions settings;
 };
 

@@ -1,7 +1,10 @@
 #include "cli_common.hpp"
 
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <string_view>
+#include <type_traits>
 
 #include "sgdicp/error.hpp"
 #include "sgdicp/transform_io.hpp"
@@ -20,15 +23,54 @@ PointCloud load_cloud(const std::string& path, const std::string& role, bool ver
   return std::move(read.cloud);
 }
 
-Eigen::Matrix4d parse_init(const std::string& text) {
-  std::error_code ec;
-  if (std::filesystem::is_regular_file(text, ec)) return read_transform(text);
-  // Inline matrices hold only numbers and separators; anything else was meant as a file name.
-  if (text.find_first_not_of("0123456789+-.eE \t\r\n,;[]") != std::string::npos ||
-      text.find_first_of("0123456789") == std::string::npos) {
-    throw IoError(text + ": no such transform file");
+namespace {
+
+// Whether text is a list of numbers (nan and inf included) separated by blanks, commas,
+// semicolons or brackets: an inline matrix rather than a file name.
+bool is_number_list(const std::string& text) {
+  std::size_t numbers = 0;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    if (std::string_view(" \t\r\n,;[]").find(text[i]) != std::string_view::npos) {
+      ++i;
+      continue;
+    }
+    const char* begin = text.c_str() + i;
+    char* end = nullptr;
+    (void)std::strtod(begin, &end);
+    if (end == begin) return false;
+    const char next = *end;
+    if (next != '\0' && std::string_view(" \t\r\n,;[]").find(next) == std::string_view::npos) {
+      return false;
+    }
+    i += static_cast<std::size_t>(end - begin);
+    ++numbers;
   }
-  return parse_transform(text, "--init");
+  return numbers > 0;
+}
+
+}  // namespace
+
+Eigen::Matrix4d parse_transform_option(const std::string& text, const std::string& option) {
+  std::error_code ec;
+  const std::filesystem::path path(text);
+  if (std::filesystem::is_directory(path, ec)) {
+    throw IoError(option + " " + text + ": a directory, not a transform file");
+  }
+  if (std::filesystem::exists(path, ec)) {
+    try {
+      return read_transform(path);
+    } catch (const FormatError& e) {
+      throw FormatError(option + ": " + e.what());
+    } catch (const IoError& e) {
+      throw IoError(option + ": " + e.what());
+    }
+  }
+  if (!is_number_list(text)) {
+    throw IoError(option + " " + text +
+                  ": no such transform file (and not 12 or 16 numbers either)");
+  }
+  return parse_transform(text, option);
 }
 
 nlohmann::json matrix_to_json(const Eigen::Matrix4d& T) {
@@ -40,22 +82,15 @@ nlohmann::json matrix_to_json(const Eigen::Matrix4d& T) {
 }
 
 nlohmann::json result_to_json(const RegistrationResult& r) {
-  return {{"transform", matrix_to_json(r.T_reference_source)},
-          {"converged", r.converged},
-          {"stop_reason", std::string(to_string(r.stop_reason))},
-          {"message", r.message},
-          {"iterations", r.iterations},
-          {"points_processed", r.points_processed},
-          {"stages", r.stages},
-          {"time_ms", r.time_ms},
-          {"evaluated_points", r.evaluated_points},
-          {"inliers", r.inliers},
-          {"inlier_ratio", r.inlier_ratio},
-          {"inlier_rmse_m", r.inlier_rmse_m},
-          {"final_max_distance_m", r.final_max_distance_m},
-          {"scale_m", r.scale_m},
-          {"constraint_ratio", r.constraint_ratio},
-          {"degenerate", r.degenerate}};
+  nlohmann::json j{{"transform", matrix_to_json(r.T_reference_source)}};
+  for_each_result_field([&](const char* name, auto member, const char*) {
+    if constexpr (std::is_same_v<std::remove_cvref_t<decltype(r.*member)>, StopReason>) {
+      j[name] = std::string(to_string(r.*member));
+    } else {
+      j[name] = r.*member;
+    }
+  });
+  return j;
 }
 
 }  // namespace sgdicp::cli

@@ -15,8 +15,9 @@ namespace sgdicp::cli {
 /// on stderr when verbose.
 PointCloud load_cloud(const std::string& path, const std::string& role, bool verbose);
 
-/// Parses --init: a file holding 12/16 numbers, or the 12/16 numbers inline.
-Eigen::Matrix4d parse_init(const std::string& text);
+/// Parses a transform option (--init, --ground-truth): a file holding 12/16 numbers, or the
+/// 12/16 numbers inline. Errors name the option.
+Eigen::Matrix4d parse_transform_option(const std::string& text, const std::string& option);
 
 nlohmann::json matrix_to_json(const Eigen::Matrix4d& T);
 

@@ -1,5 +1,7 @@
 // `sgdicp register SOURCE REFERENCE`: one registration, printed as text or JSON.
+#include <cctype>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -47,11 +49,23 @@ void write_trace_csv(const std::string& path, const RegistrationResult& r) {
   if (!out) throw IoError(path + ": write error");
 }
 
+// The picture is always PNG: a name that says otherwise is refused before any work is done.
+void check_picture_name(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".png") {
+    throw InvalidSettingsError("--picture " + path +
+                               ": the picture is written as PNG, give it a .png name");
+  }
+}
+
 void run(const RegisterOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
-  const Eigen::Matrix4d T_init = o.init.empty() ? Eigen::Matrix4d::Identity() : parse_init(o.init);
+  if (!o.picture.empty()) check_picture_name(o.picture);
+  const Eigen::Matrix4d T_init =
+      o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
   std::optional<Eigen::Matrix4d> T_gt;
-  if (!o.ground_truth.empty()) T_gt = parse_init(o.ground_truth);
+  if (!o.ground_truth.empty()) T_gt = parse_transform_option(o.ground_truth, "--ground-truth");
   const PointCloud source = load_cloud(o.source, "source", !o.json);
   const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json);
   const MethodRun run = run_method(method, source, reference_cloud, T_init, !o.trace.empty());
@@ -149,7 +163,8 @@ void add_register_command(CLI::App& app) {
   cmd->add_option("--aligned", o->aligned,
                   "Write the moved source cloud to this file (.ply, .pcd or .xyz)");
   cmd->add_option("--picture", o->picture,
-                  "Write a PNG of the reference and the aligned source (top and side view)");
+                  "Write a PNG (the name must end in .png) of the reference and the aligned "
+                  "source (top and side view)");
   cmd->add_option(
       "--trace", o->trace,
       "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");

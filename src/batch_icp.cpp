@@ -18,38 +18,6 @@
 
 namespace sgdicp {
 
-BatchSettings BatchSettings::icp() {
-  return BatchSettings{};
-}
-
-BatchSettings BatchSettings::icp_plane() {
-  BatchSettings s;
-  s.cost = CostType::point_to_plane;
-  return s;
-}
-
-BatchSettings BatchSettings::gicp() {
-  BatchSettings s;
-  s.cost = CostType::plane_to_plane;
-  return s;
-}
-
-void BatchSettings::validate() const {
-  detail::require_positive(max_correspondence_distance.value, "max correspondence distance");
-  detail::require_positive(kernel_scale.value, "kernel scale");
-  if (!(trim_ratio > 0.0 && trim_ratio <= 1.0)) {
-    throw InvalidSettingsError("trim ratio must be in (0, 1]");
-  }
-  if (max_iterations == 0) throw InvalidSettingsError("max iterations must be at least 1");
-  if (!(translation_tolerance >= 0.0) || !(rotation_tolerance >= 0.0) ||
-      !std::isfinite(translation_tolerance) || !std::isfinite(rotation_tolerance)) {
-    throw InvalidSettingsError("tolerances must be finite and non-negative");
-  }
-  if (!(initial_damping >= 0.0) || !std::isfinite(initial_damping)) {
-    throw InvalidSettingsError("initial damping must be finite and non-negative");
-  }
-}
-
 namespace {
 
 struct BatchPair {

@@ -10,7 +10,6 @@
 #include "sgdicp/error.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/pose.hpp"
-#include "sgdicp/registration.hpp"
 
 namespace sgdicp::detail {
 
@@ -38,13 +37,6 @@ inline void check_initial_transform(const Eigen::Matrix4d& T_init) {
     throw InvalidInputError(
         "initial transform is not a finite rigid transform (rotation part must be orthonormal "
         "with determinant 1, last row 0 0 0 1)");
-  }
-}
-
-/// Throws InvalidSettingsError unless v is positive and finite.
-inline void require_positive(double v, const char* what) {
-  if (!(v > 0.0) || !std::isfinite(v)) {
-    throw InvalidSettingsError(std::string(what) + " must be positive and finite");
   }
 }
 

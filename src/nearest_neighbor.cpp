@@ -119,13 +119,17 @@ std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,
   return Neighbor{result.index(), result.worstDist()};
 }
 
-void ReferenceIndex::estimate_covariances(const NeighborhoodSettings& settings) {
-  // The tree points at impl_->cloud.points, so compute into a copy and move the results back.
-  PointCloud copy;
-  copy.points = impl_->cloud.points;
-  sgdicp::estimate_covariances(copy, *this, settings);
-  impl_->cloud.normals = std::move(copy.normals);
-  impl_->cloud.covariances = std::move(copy.covariances);
+void ReferenceIndex::set_normals_and_covariances(std::vector<Eigen::Vector3f> normals,
+                                                 std::vector<Eigen::Matrix3f> covariances) {
+  const std::size_t n = size();
+  if ((!normals.empty() && normals.size() != n) ||
+      (!covariances.empty() && covariances.size() != n)) {
+    throw InvalidInputError("the reference has " + std::to_string(n) + " points but " +
+                            std::to_string(normals.size()) + " normals and " +
+                            std::to_string(covariances.size()) + " covariances were given");
+  }
+  impl_->cloud.normals = std::move(normals);
+  impl_->cloud.covariances = std::move(covariances);
 }
 
 void ReferenceIndex::k_nearest(const Eigen::Vector3f& query, std::size_t k,

@@ -7,80 +7,12 @@
 #include "sgdicp/error.hpp"
 #include "sgdicp/evaluation.hpp"
 #include "sgdicp/pose.hpp"
+#include "sgdicp/preprocessing.hpp"
 #include "sgdicp/sampler.hpp"
 #include "sgdicp/scaling.hpp"
 #include "solver_support.hpp"
 
 namespace sgdicp {
-
-std::string_view to_string(StopReason reason) {
-  switch (reason) {
-    case StopReason::converged:
-      return "converged";
-    case StopReason::max_iterations:
-      return "max_iterations";
-    case StopReason::no_correspondences:
-      return "no_correspondences";
-    case StopReason::diverged:
-      return "diverged";
-    case StopReason::no_descent:
-      return "no_descent";
-  }
-  return "?";
-}
-
-SgdSettings SgdSettings::paper(OptimizerType optimizer) {
-  SgdSettings s;
-  s.batch_size = 160;
-  s.max_correspondence_distance = Distance::scaled(0.5);
-  s.optimizer.type = optimizer;
-  // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
-  // divides by the gradient's RMS), so alpha = 2 would jump twice across the unit cube; we use
-  // the original implementation's Adam step 0.1 scaled down by the measured factor
-  // (docs/design.md).
-  s.optimizer.learning_rate = optimizer == OptimizerType::sgd ? 2.0 : 0.01;
-  s.scaling_origin = ScalingOrigin::lower_corner;
-  s.refinement.stages = 0;
-  s.average_iterates = false;
-  return s;
-}
-
-void SgdSettings::validate() const {
-  if (batch_size == 0) throw InvalidSettingsError("batch size must be at least 1");
-  if (!(max_correspondence_distance.value > 0.0) ||
-      !std::isfinite(max_correspondence_distance.value)) {
-    throw InvalidSettingsError("max correspondence distance must be positive and finite");
-  }
-  optimizer.validate();
-  if (convergence.window < 8) throw InvalidSettingsError("convergence window must be at least 8");
-  if (!(convergence.chi2 > 0.0) || !std::isfinite(convergence.chi2)) {
-    throw InvalidSettingsError("convergence chi2 must be positive and finite");
-  }
-  if (!(convergence.max_path_efficiency > 0.0 && convergence.max_path_efficiency <= 1.0)) {
-    throw InvalidSettingsError("convergence max path efficiency must be in (0, 1]");
-  }
-  if (!(convergence.translation_tolerance >= 0.0) || !(convergence.rotation_tolerance >= 0.0) ||
-      !std::isfinite(convergence.translation_tolerance) ||
-      !std::isfinite(convergence.rotation_tolerance)) {
-    throw InvalidSettingsError("convergence tolerances must be finite and non-negative");
-  }
-  if (!(refinement.step_decay > 0.0 && refinement.step_decay <= 1.0)) {
-    throw InvalidSettingsError("refinement step decay must be in (0, 1]");
-  }
-  if (!(refinement.distance_factor > 0.0) || !std::isfinite(refinement.distance_factor)) {
-    throw InvalidSettingsError("refinement distance factor must be positive and finite");
-  }
-  if (!(refinement.min_distance.value > 0.0) || !std::isfinite(refinement.min_distance.value)) {
-    throw InvalidSettingsError("refinement minimum distance must be positive and finite");
-  }
-  if (max_iterations == 0) throw InvalidSettingsError("max iterations must be at least 1");
-  if (!(trim_ratio > 0.0 && trim_ratio <= 1.0)) {
-    throw InvalidSettingsError("trim ratio must be in (0, 1]");
-  }
-  if (!(kernel_scale.value > 0.0) || !std::isfinite(kernel_scale.value)) {
-    throw InvalidSettingsError("kernel scale must be positive and finite");
-  }
-}
 
 namespace {
 

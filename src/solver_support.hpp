@@ -11,7 +11,6 @@
 #include "checks.hpp"
 #include "sgdicp/cost.hpp"
 #include "sgdicp/evaluation.hpp"
-#include "sgdicp/features.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/preprocessing.hpp"
@@ -61,7 +60,7 @@ class PreparedSource {
 inline void check_pair(const ReferenceIndex& reference, CostType cost,
                        const Eigen::Matrix4d& T_init) {
   check_initial_transform(T_init);
-  check_reference_features(reference, cost);
+  check_reference_prepared(reference, cost);
 }
 
 /// The paper's map of both clouds into the unit cube (scaling.hpp).

@@ -267,6 +267,85 @@ expect_error "a reference of only NaN points" 'finite|nan|no points|empty' \
 expect_error "--output into a missing folder" 'cannot|no such|open|write' \
   register "$MOVED" "$REF" --output "$tmp/no/such/folder/T.txt"
 
+# Every numeric option is range-checked with its name and valid range (settings.hpp's table):
+# absurd values neither crash (bad_alloc), wrap around nor return the initial pose as converged.
+expect_error "--window 1000000000" '^sgdicp: error: --window 1000000000: must be in \[8, 100000\]' \
+  register "$MOVED" "$REF" --window 1000000000
+expect_error "--window 2^64 does not wrap" '--window 18446744073709551616: must be in' \
+  register "$MOVED" "$REF" --window 18446744073709551616
+for opt in --max-iterations --seed --refine-stages --evaluation-points; do
+  expect_error "$opt -1" "$opt -1: not a non-negative integer" register "$MOVED" "$REF" "$opt" -1
+  expect_error "$opt 2^64" "$opt 18446744073709551616: must be in" \
+    register "$MOVED" "$REF" "$opt" 18446744073709551616
+done
+expect_error "--learning-rate 1e-308" '--learning-rate 1e-308: must be in \[1e-06, 10000\]' \
+  register "$MOVED" "$REF" --learning-rate 1e-308
+expect_error "--epsilon 1e308" '--epsilon 1e\+308: must be in \(0, 1\]' \
+  register "$MOVED" "$REF" --epsilon 1e308
+expect_error "--kernel-scale 1e-308 --kernel huber" '--kernel-scale 1e-308 scaled: must be in' \
+  register "$MOVED" "$REF" --kernel-scale 1e-308 --kernel huber
+expect_error "--kernel-scale 1e-9 m" '--kernel-scale 1e-09 m: must be in \[1e-06, 1000000\] m' \
+  register "$MOVED" "$REF" --kernel-scale 1e-9 --max-distance-unit m
+expect_error "--damping 1e308 (icp-plane)" '--damping 1e\+308: must be in \[0, 100\]' \
+  register "$MOVED" "$REF" --method icp-plane --damping 1e308
+expect_error "--distance-factor 1e-308" '--distance-factor 1e-308: must be in \[1, 1000\]' \
+  register "$MOVED" "$REF" --distance-factor 1e-308
+expect_error "--max-distance 1e400" '--max-distance 1e400: must be in' \
+  register "$MOVED" "$REF" --max-distance 1e400
+expect_error "--learning-rate nan" '--learning-rate nan: must be in' \
+  register "$MOVED" "$REF" --learning-rate nan
+expect_error "--batch-size 1.5" '--batch-size 1.5: not a non-negative integer' \
+  register "$MOVED" "$REF" --batch-size 1.5
+expect_error "--batch-size x --window too large" '--batch-size x --window' \
+  register "$MOVED" "$REF" --batch-size 100000 --window 10000
+expect_error "--scaling-origin middle" '--scaling-origin: unknown scaling origin .middle.' \
+  register "$MOVED" "$REF" --scaling-origin middle
+expect_error "--preconditioner contradicting --optimizer" 'contradicts --optimizer adam' \
+  register "$MOVED" "$REF" --preconditioner gauss-newton --optimizer adam
+# Accepted spellings of the same choice give the same bits.
+run register "$MOVED" "$REF" --scaling-origin corner --output "$tmp/corner_T.txt"
+run register "$MOVED" "$REF" --scaling-origin lower-corner --output "$tmp/lower_corner_T.txt"
+run register "$MOVED" "$REF" --scaling-origin lower_corner --output "$tmp/lower_corner2_T.txt"
+if [ "$rc" -eq 0 ] && cmp -s "$tmp/corner_T.txt" "$tmp/lower_corner_T.txt" &&
+  cmp -s "$tmp/corner_T.txt" "$tmp/lower_corner2_T.txt"; then
+  pass "--scaling-origin corner, lower-corner and lower_corner are the same origin"
+else
+  fail "--scaling-origin spellings differ (exit $rc)"
+fi
+# One table of step sizes: --preset paper with --optimizer gauss-newton and with
+# --preconditioner gauss-newton are the same run (they ran 100x apart in step size before).
+run register "$MOVED" "$REF" --preset paper --optimizer gauss-newton --trace "$tmp/gn_opt.csv"
+run register "$MOVED" "$REF" --preset paper --preconditioner gauss-newton --trace "$tmp/gn_pre.csv"
+if [ "$rc" -eq 0 ] && cmp -s "$tmp/gn_opt.csv" "$tmp/gn_pre.csv" &&
+  [ "$(sed -n 2p "$tmp/gn_opt.csv" | cut -d, -f3)" = "1" ]; then
+  pass "--preset paper: --optimizer gauss-newton = --preconditioner gauss-newton, step 1"
+else
+  fail "--preset paper gauss-newton: the two spellings differ or the step is not 1"
+fi
+
+# Transform options name themselves in their errors.
+expect_error "--ground-truth with 5 numbers names --ground-truth" '^sgdicp: error: --ground-truth' \
+  register "$MOVED" "$REF" --ground-truth "1 2 3 4 5"
+expect_error "--init with an inline NaN is not a missing file" '^sgdicp: error: --init: .*non-finite' \
+  register "$MOVED" "$REF" --init "nan 0 0 0 0 1 0 0 0 0 1 0"
+expect_error "--init with a directory" '--init .*: a directory, not a transform file' \
+  register "$MOVED" "$REF" --init "$tmp"
+expect_error "--ground-truth with a directory" '--ground-truth .*: a directory' \
+  register "$MOVED" "$REF" --ground-truth "$tmp"
+expect_error "--picture x.jpg is refused (PNG only)" '--picture .*x.jpg: .*PNG.*\.png' \
+  register "$MOVED" "$REF" --picture "$tmp/x.jpg"
+if [ ! -e "$tmp/x.jpg" ]; then
+  pass "--picture x.jpg writes nothing"
+else
+  fail "--picture x.jpg wrote a file"
+fi
+run register "$MOVED" "$REF" --picture "$tmp/pic.PNG"
+if [ "$rc" -eq 0 ] && [ "$(head -c 4 "$tmp/pic.PNG" | tail -c 3)" = "PNG" ]; then
+  pass "--picture pic.PNG writes PNG data"
+else
+  fail "--picture pic.PNG (exit $rc): $(head -c 300 "$tmp/err")"
+fi
+
 # --init inline and from a file, on synthetic data.
 expect_ok "--init with 12 inline numbers" register "$MOVED" "$REF" --init "$IDENTITY12"
 expect_ok "--init with 16 inline numbers, commas" register "$MOVED" "$REF" \

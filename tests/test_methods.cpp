@@ -10,10 +10,10 @@
 #include <gtest/gtest.h>
 
 #include "sgdicp/batch_icp.hpp"
-#include "sgdicp/features.hpp"
 #include "sgdicp/io.hpp"
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/pairs.hpp"
+#include "sgdicp/preprocessing.hpp"
 #include "sgdicp/registration.hpp"
 #include "test_support.hpp"
 

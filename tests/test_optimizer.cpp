@@ -120,17 +120,17 @@ TEST(Optimizer, GaussNewtonDampingShortensTheStepTowardsGradientDescent) {
   const Matrix6d h = example_hessian();
   const PoseVector g = example_gradient();
   double previous = std::numeric_limits<double>::infinity();
-  for (const double damping : {0.0, 1e-3, 1.0, 1e3}) {
+  for (const double damping : {0.0, 1e-3, 1.0, 100.0}) {
     OptimizerSettings s = settings_of(OptimizerType::gauss_newton, 1.0);
     s.damping = damping;
     Optimizer gn(s);
     const PoseVector step = gn.step(g, h);
     EXPECT_LT(step.norm(), previous) << "damping " << damping;
     previous = step.norm();
-    if (damping == 1e3) {
+    if (damping == 100.0) {
       // Heavily damped: -g / lambda, a small gradient-descent step.
       const double lambda = damping * h.trace() / 6.0;
-      EXPECT_TRUE(step.isApprox(-g / lambda, 1e-2));
+      EXPECT_TRUE(step.isApprox(-g / lambda, 0.05));
     }
   }
 }

@@ -1,6 +1,6 @@
 #pragma once
-// When has a stochastic run stopped improving? (DESIGN "Convergence".) Raw SGD steps never reach
-// zero, so a threshold on single steps either stops too early or never, and tests on the
+// When has a stochastic run stopped improving? (docs/design.md, "Convergence".) Raw SGD steps never
+// reach zero, so a threshold on single steps either stops too early or never, and tests on the
 // iterates are fooled by their autocorrelation at small step sizes. We test the mini-batch
 // gradients instead, which are nearly independent from batch to batch whatever the optimiser.
 // Over a window of W iterations, a stage is stationary when the mean gradient is not
@@ -46,6 +46,7 @@ struct ConvergenceSettings {
   /// ... and the angles less than this (sum of |d roll|, |d pitch|, |d yaw|, rad; the same sum
   /// of the mean gradient's angle part) is stationary.
   double rotation_tolerance = 1e-6;
+  bool operator==(const ConvergenceSettings&) const = default;
 };
 
 /// The verdict of ConvergenceMonitor::update on the iteration it has just recorded.

@@ -12,16 +12,18 @@
 //
 // The mini-batch objective and its derivatives (paper eq. 3-7 generalised):
 //   F = 1/(4m) sum_i rho(s_i),  g = dF/dtheta = 1/(2m) sum_i w_i J_i^T Omega_i e_i,
-//   H = 1/(2m) sum_i w_i J_i^T Omega_i J_i (Gauss-Newton),  w_i = rho'(s_i), s_i = e_i^T Omega_i
-//   e_i,
-// with J_i = dq_i/dtheta. Omega of plane-to-plane depends on R; like every GICP implementation we
-// hold it fixed within an iteration (g is the exact gradient of F with Omega frozen).
+//   H = 1/(2m) sum_i w_i J_i^T Omega_i J_i (Gauss-Newton),
+// with s_i = e_i^T Omega_i e_i, w_i = rho'(s_i) and J_i = dq_i/dtheta. Omega of plane-to-plane
+// depends on R; like every GICP implementation we hold it fixed within an iteration (g is the exact
+// gradient of F with Omega frozen).
+#include <array>
 #include <string>
 #include <string_view>
 
 #include <Eigen/Core>
 #include <Eigen/LU>
 
+#include "sgdicp/enum_names.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/pose.hpp"
 #include "sgdicp/robust_kernel.hpp"
@@ -33,16 +35,24 @@ using PoseJacobianMatrix = Eigen::Matrix<double, 3, 6>;
 
 enum class CostType { point_to_point, point_to_plane, plane_to_plane };
 
+inline constexpr std::array<EnumName<CostType>, 3> kCostNames{{
+    {CostType::point_to_point, "point-to-point"},
+    {CostType::point_to_plane, "point-to-plane"},
+    {CostType::plane_to_plane, "plane-to-plane"},
+}};
+constexpr const auto& enum_names(CostType) {
+  return kCostNames;
+}
+constexpr std::string_view enum_noun(CostType) {
+  return "cost";
+}
+
 [[nodiscard]] inline std::string_view to_string(CostType t) {
-  switch (t) {
-    case CostType::point_to_point:
-      return "point-to-point";
-    case CostType::point_to_plane:
-      return "point-to-plane";
-    case CostType::plane_to_plane:
-      return "plane-to-plane";
-  }
-  return "?";
+  return enum_name(t);
+}
+/// Parses a name of kCostNames ('_' for '-' too); throws InvalidSettingsError otherwise.
+[[nodiscard]] inline CostType cost_from_string(std::string_view name) {
+  return parse_enum<CostType>(name);
 }
 
 /// What a cost needs besides the points.

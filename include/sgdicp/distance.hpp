@@ -1,6 +1,9 @@
 #pragma once
-// A length with its unit, for the settings that accept either metres or the paper's scaled
-// units.
+// A length with an explicit unit, the one type every distance setting uses.
+#include <array>
+
+#include "sgdicp/enum_names.hpp"
+
 namespace sgdicp {
 
 /// A length with an explicit unit: metres, or units of the paper's [0, 1] scaled space
@@ -23,5 +26,18 @@ struct Distance {
 
   friend bool operator==(const Distance&, const Distance&) = default;
 };
+
+inline constexpr std::array<EnumName<Distance::Unit>, 4> kDistanceUnitNames{{
+    {Distance::Unit::metres, "m"},
+    {Distance::Unit::scaled, "scaled"},
+    {Distance::Unit::metres, "metres"},
+    {Distance::Unit::metres, "meters"},
+}};
+constexpr const auto& enum_names(Distance::Unit) {
+  return kDistanceUnitNames;
+}
+constexpr std::string_view enum_noun(Distance::Unit) {
+  return "unit";
+}
 
 }  // namespace sgdicp

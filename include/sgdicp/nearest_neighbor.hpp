@@ -19,8 +19,6 @@ struct Neighbor {
   float squared_distance = 0.0F;  ///< metres^2
 };
 
-struct NeighborhoodSettings;
-
 struct KdTreeSettings {
   /// Points per leaf. Larger leaves make the build cheaper (fewer levels to split) and, up to
   /// ~32, cost the single-nearest queries nothing measurable, since scanning a leaf is cheaper
@@ -50,9 +48,12 @@ class ReferenceIndex {
       const Eigen::Vector3f& query,
       float max_squared_distance = std::numeric_limits<float>::max()) const;
 
-  /// Estimates normals and covariances of the reference over this tree (preprocessing.hpp),
-  /// stored in cloud(). Not thread-safe: call it before sharing the index between threads.
-  void estimate_covariances(const NeighborhoodSettings& settings);
+  /// Stores the reference's normals and covariances in cloud() (one per point each, or empty),
+  /// as estimate_covariances (preprocessing.hpp) computes them over this tree; prepare_reference
+  /// does both. Throws InvalidInputError for another count. Not thread-safe: call it before
+  /// sharing the index between threads.
+  void set_normals_and_covariances(std::vector<Eigen::Vector3f> normals,
+                                   std::vector<Eigen::Matrix3f> covariances);
 
   /// The k nearest reference points to query, closest first (fewer if the cloud is smaller).
   /// `neighbors` is cleared and refilled; pass the same vector again to avoid allocations.

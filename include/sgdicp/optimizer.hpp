@@ -4,43 +4,62 @@
 // and Adam (Kingma and Ba 2015, the paper's "Adam-SGD"); and a pre-conditioned step with A the
 // inverse of a damped, averaged mini-batch Gauss-Newton matrix (eq. 3 with A != I, which the
 // paper leaves for future work).
+#include <array>
 #include <cmath>
 #include <string>
 #include <string_view>
 
 #include <Eigen/Cholesky>
-#include "sgdicp/error.hpp"
 
+#include "sgdicp/enum_names.hpp"
+#include "sgdicp/error.hpp"
 #include "sgdicp/pose.hpp"
 
 namespace sgdicp {
 
 enum class OptimizerType { sgd, momentum, rmsprop, adam, gauss_newton };
 
-[[nodiscard]] inline std::string_view to_string(OptimizerType t) {
-  switch (t) {
-    case OptimizerType::sgd:
-      return "sgd";
-    case OptimizerType::momentum:
-      return "momentum";
-    case OptimizerType::rmsprop:
-      return "rmsprop";
-    case OptimizerType::adam:
-      return "adam";
-    case OptimizerType::gauss_newton:
-      return "gauss-newton";
-  }
-  return "?";
+inline constexpr std::array<EnumName<OptimizerType>, 5> kOptimizerNames{{
+    {OptimizerType::sgd, "sgd"},
+    {OptimizerType::momentum, "momentum"},
+    {OptimizerType::rmsprop, "rmsprop"},
+    {OptimizerType::adam, "adam"},
+    {OptimizerType::gauss_newton, "gauss-newton"},
+}};
+constexpr const auto& enum_names(OptimizerType) {
+  return kOptimizerNames;
+}
+constexpr std::string_view enum_noun(OptimizerType) {
+  return "optimizer";
 }
 
-/// Parses "sgd", "momentum", "rmsprop" or "adam"; throws InvalidSettingsError otherwise.
+[[nodiscard]] inline std::string_view to_string(OptimizerType t) {
+  return enum_name(t);
+}
+
+/// Parses a name of kOptimizerNames ('_' for '-' too); throws InvalidSettingsError otherwise.
 [[nodiscard]] inline OptimizerType optimizer_from_string(std::string_view name) {
-  for (const auto t : {OptimizerType::sgd, OptimizerType::momentum, OptimizerType::rmsprop,
-                       OptimizerType::adam, OptimizerType::gauss_newton}) {
-    if (name == to_string(t)) return t;
+  return parse_enum<OptimizerType>(name);
+}
+
+/// The step size each rule runs with unless told otherwise, the one table that the presets,
+/// the CLI's --optimizer and Python's optimizer= read. Adaptive rules (Adam, RMSProp) take a
+/// length per step in scaled units; the fixed step a gradient multiplier (the paper's 2), and
+/// momentum the same once its velocity has built up (hence 2 (1 - momentum)); Gauss-Newton a
+/// fraction of the Newton step (1 = the full step).
+[[nodiscard]] constexpr double default_learning_rate(OptimizerType type, double momentum = 0.9) {
+  switch (type) {
+    case OptimizerType::sgd:
+      return 2.0;
+    case OptimizerType::momentum:
+      return 2.0 * (1.0 - momentum);
+    case OptimizerType::gauss_newton:
+      return 1.0;
+    case OptimizerType::rmsprop:
+    case OptimizerType::adam:
+      break;
   }
-  throw InvalidSettingsError("unknown optimizer '" + std::string(name) +
-                             "' (expected sgd, momentum, rmsprop, adam or gauss-newton)");
+  return 0.01;
 }
 
 struct OptimizerSettings {
@@ -57,23 +76,10 @@ struct OptimizerSettings {
   /// Gauss-Newton: Levenberg damping, relative to the mean diagonal of the averaged matrix.
   double damping = 1e-3;
 
-  void validate() const {
-    const auto in_unit = [](double v) { return v >= 0.0 && v < 1.0; };
-    if (!(learning_rate > 0.0) || !std::isfinite(learning_rate)) {
-      throw InvalidSettingsError("learning rate must be positive and finite");
-    }
-    if (!in_unit(momentum) || !in_unit(beta1) || !in_unit(beta2) || !in_unit(rms_decay) ||
-        !in_unit(hessian_decay)) {
-      throw InvalidSettingsError(
-          "momentum, beta1, beta2, rms-decay and hessian-decay must be in [0, 1)");
-    }
-    if (!(damping >= 0.0) || !std::isfinite(damping)) {
-      throw InvalidSettingsError("damping must be finite and non-negative");
-    }
-    if (!(epsilon > 0.0) || !std::isfinite(epsilon)) {
-      throw InvalidSettingsError("epsilon must be positive and finite");
-    }
-  }
+  /// Throws InvalidSettingsError for a value outside its range (settings.hpp's table).
+  void validate() const;
+
+  bool operator==(const OptimizerSettings&) const = default;
 };
 
 /// The state of one optimiser run. step() returns the increment to add to theta.

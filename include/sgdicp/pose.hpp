@@ -1,6 +1,6 @@
 #pragma once
 // The pose model of the paper: theta = (x, y, z, roll, pitch, yaw) and p' = R p + t with
-// R = Rz(yaw) * Ry(pitch) * Rx(roll) (paper eq. 2; DESIGN "Pose model").
+// R = Rz(yaw) * Ry(pitch) * Rx(roll) (paper eq. 2; docs/design.md, "Pose model").
 #include <algorithm>
 #include <array>
 #include <cmath>

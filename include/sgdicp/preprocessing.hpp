@@ -1,12 +1,14 @@
 #pragma once
 // Preprocessing for the plane-based costs and for thinning clouds: local covariances and normals
-// from k-nearest neighbourhoods (point-to-plane, GICP), voxel-grid and random downsampling.
+// from k-nearest neighbourhoods (point-to-plane, GICP), the one estimator every caller uses (also
+// prepare_reference for a reference index), and voxel-grid and random downsampling.
 // See docs/preprocessing.md for settings, costs and an example.
 #include <cstddef>
 #include <cstdint>
 
 #include <Eigen/Core>
 
+#include "sgdicp/cost.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
 #include "sgdicp/point_cloud.hpp"
 
@@ -27,6 +29,7 @@ struct NeighborhoodSettings {
   double epsilon = 1e-3;
   /// Normals are flipped to face this point (metres): n.dot(viewpoint - p) >= 0.
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+  bool operator==(const NeighborhoodSettings&) const = default;
 };
 
 /// Fills cloud.covariances and cloud.normals (one per point) from the k nearest neighbours of
@@ -58,6 +61,15 @@ void estimate_covariances(PointCloud& cloud, const ReferenceIndex& index,
 void estimate_normals(PointCloud& cloud, const NeighborhoodSettings& settings = {});
 void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
                       const NeighborhoodSettings& settings = {});
+
+/// Gives the reference what `cost` needs (cost.hpp: normals for point-to-plane, covariances for
+/// plane-to-plane), estimated with estimate_covariances over its own tree, unless it has it
+/// already. Not thread-safe: call it before sharing the index between threads.
+void prepare_reference(ReferenceIndex& reference, CostType cost,
+                       const NeighborhoodSettings& neighborhood = {});
+
+/// Throws InvalidInputError when the reference lacks what `cost` needs, saying how to get it.
+void check_reference_prepared(const ReferenceIndex& reference, CostType cost);
 
 /// One point per occupied cubic voxel of side voxel_size_m (metres): the centroid of the input
 /// points in it. Voxel (i, j, l) holds the points with floor(x / voxel_size_m) = i, etc.

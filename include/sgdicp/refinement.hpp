@@ -24,6 +24,7 @@ struct RefinementSettings {
   double step_decay = 0.5;
   double distance_factor = 3.0;
   Distance min_distance = Distance::scaled(1e-4);
+  bool operator==(const RefinementSettings&) const = default;
 };
 
 /// The state of the schedule during one run: d_max, the step multiplier, the stage, and the

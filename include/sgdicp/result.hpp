@@ -1,12 +1,15 @@
 #pragma once
 // What a registration reports, whatever the method: the transform, why it stopped, how much
 // work it took, and how good and how well-constrained the final alignment is.
+#include <array>
 #include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "sgdicp/enum_names.hpp"
 
 namespace sgdicp {
 
@@ -17,7 +20,23 @@ enum class StopReason {
   diverged,            ///< the pose became non-finite or left the scaled space far behind
   no_descent,  ///< batch Levenberg-Marquardt: no damping lowered the cost before convergence
 };
-[[nodiscard]] std::string_view to_string(StopReason reason);
+
+inline constexpr std::array<EnumName<StopReason>, 5> kStopReasonNames{{
+    {StopReason::converged, "converged"},
+    {StopReason::max_iterations, "max_iterations"},
+    {StopReason::no_correspondences, "no_correspondences"},
+    {StopReason::diverged, "diverged"},
+    {StopReason::no_descent, "no_descent"},
+}};
+constexpr const auto& enum_names(StopReason) {
+  return kStopReasonNames;
+}
+constexpr std::string_view enum_noun(StopReason) {
+  return "stop reason";
+}
+[[nodiscard]] inline std::string_view to_string(StopReason reason) {
+  return enum_name(reason);
+}
 
 struct TraceEntry {
   std::size_t iteration = 0;
@@ -52,5 +71,39 @@ struct RegistrationResult {
   bool degenerate = false;        ///< constraint_ratio below the threshold: see `message`
   std::vector<TraceEntry> trace;  ///< per iteration, when record_trace is set
 };
+
+/// Calls f(name, member pointer, description) for every field of RegistrationResult but the
+/// transform and the trace: the one list that the CLI's JSON and the Python result read.
+template <typename F>
+void for_each_result_field(F&& f) {
+  using R = RegistrationResult;
+  f("converged", &R::converged, "True if the convergence test passed after all refinement stages.");
+  f("stop_reason", &R::stop_reason,
+    "'converged', 'max_iterations', 'no_correspondences' or 'diverged'.");
+  f("message", &R::message, "One line on why it stopped.");
+  f("iterations", &R::iterations,
+    "Mini-batches (batch methods: passes over the source) processed.");
+  f("points_processed", &R::points_processed,
+    "Source points paired (SGD: iterations x batch size).");
+  f("stages", &R::stages, "Stationary stages completed.");
+  f("evaluated_points", &R::evaluated_points,
+    "Source points (spread evenly) in the final inlier statistics.");
+  f("inliers", &R::inliers, "Of those, with a reference point within the final d_max.");
+  f("inlier_ratio", &R::inlier_ratio, "inliers / evaluated_points.");
+  f("inlier_rmse_m", &R::inlier_rmse_m,
+    "RMS distance of the inliers to their nearest reference point, metres.");
+  f("final_max_distance_m", &R::final_max_distance_m,
+    "d_max at the end (after refinement), metres.");
+  f("scale_m", &R::scale_m, "Metres per scaled unit.");
+  f("time_ms", &R::time_ms,
+    "Wall time of the registration, milliseconds (KD-tree build excluded).");
+  f("constraint_ratio", &R::constraint_ratio,
+    "Smallest over largest eigenvalue of the point-to-plane information matrix of the final "
+    "inlier pairs (scaled space); near 0, some motion is not constrained by the data (with "
+    "check_degeneracy).");
+  f("degenerate", &R::degenerate,
+    "constraint_ratio below the threshold: the transform is not trustworthy along some motion "
+    "(see message).");
+}
 
 }  // namespace sgdicp

@@ -7,39 +7,38 @@
 //   Cauchy:         rho = c^2 log(1 + s / c^2)
 //   Geman-McClure:  rho = s c^2 / (c^2 + s)
 //   Welsch:         rho = c^2 (1 - exp(-s / c^2))
+#include <array>
 #include <cmath>
 #include <string>
 #include <string_view>
 
-#include "sgdicp/error.hpp"
+#include "sgdicp/enum_names.hpp"
 
 namespace sgdicp {
 
 enum class KernelType { none, huber, cauchy, geman_mcclure, welsch };
 
-[[nodiscard]] inline std::string_view to_string(KernelType t) {
-  switch (t) {
-    case KernelType::none:
-      return "none";
-    case KernelType::huber:
-      return "huber";
-    case KernelType::cauchy:
-      return "cauchy";
-    case KernelType::geman_mcclure:
-      return "geman-mcclure";
-    case KernelType::welsch:
-      return "welsch";
-  }
-  return "?";
+inline constexpr std::array<EnumName<KernelType>, 5> kKernelNames{{
+    {KernelType::none, "none"},
+    {KernelType::huber, "huber"},
+    {KernelType::cauchy, "cauchy"},
+    {KernelType::geman_mcclure, "geman-mcclure"},
+    {KernelType::welsch, "welsch"},
+}};
+constexpr const auto& enum_names(KernelType) {
+  return kKernelNames;
+}
+constexpr std::string_view enum_noun(KernelType) {
+  return "kernel";
 }
 
+[[nodiscard]] inline std::string_view to_string(KernelType t) {
+  return enum_name(t);
+}
+
+/// Parses a name of kKernelNames ('_' for '-' too); throws InvalidSettingsError otherwise.
 [[nodiscard]] inline KernelType kernel_from_string(std::string_view name) {
-  for (const auto t : {KernelType::none, KernelType::huber, KernelType::cauchy,
-                       KernelType::geman_mcclure, KernelType::welsch}) {
-    if (name == to_string(t)) return t;
-  }
-  throw InvalidSettingsError("unknown kernel '" + std::string(name) +
-                             "' (expected none, huber, cauchy, geman-mcclure or welsch)");
+  return parse_enum<KernelType>(name);
 }
 
 /// rho(s) for squared residual s >= 0 and scale c > 0 (same unit as sqrt(s)).

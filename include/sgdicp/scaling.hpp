@@ -1,11 +1,13 @@
 #pragma once
-// The paper's scaling of both clouds into [0, 1] (Section III-B, DESIGN "Scaling"): one common
-// map p_s = (p - o) / k for both clouds, with o the lower corner of their joint bounding box and
-// k its largest side, so rotations stay rotations and one step size fits every sensor.
+// The paper's scaling of both clouds into [0, 1] (Section III-B, docs/design.md, "Scaling"): one
+// common map p_s = (p - o) / k for both clouds, with o the lower corner of their joint bounding box
+// and k its largest side, so rotations stay rotations and one step size fits every sensor.
+#include <array>
 #include <cmath>
 
 #include <Eigen/Core>
 
+#include "sgdicp/enum_names.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/point_cloud.hpp"
 
@@ -16,6 +18,18 @@ enum class ScalingOrigin {
   lower_corner,  ///< the paper: points land in [0, 1]
   center,        ///< the centre of the joint box: points land in [-0.5, 0.5]
 };
+
+inline constexpr std::array<EnumName<ScalingOrigin>, 3> kScalingOriginNames{{
+    {ScalingOrigin::lower_corner, "lower-corner"},
+    {ScalingOrigin::center, "center"},
+    {ScalingOrigin::lower_corner, "corner"},
+}};
+constexpr const auto& enum_names(ScalingOrigin) {
+  return kScalingOriginNames;
+}
+constexpr std::string_view enum_noun(ScalingOrigin) {
+  return "scaling origin";
+}
 
 class UnitCubeScaling {
  public:

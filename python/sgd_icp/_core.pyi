@@ -36,20 +36,24 @@ class Error(Exception):
 
 class InvalidInputError(Error, ValueError):
     """Input the method cannot work with: a wrong array shape or dtype, an empty or all-NaN cloud,
-    fewer source points than a mini-batch, a non-rigid initial transform."""
+    fewer points than a mini-batch, a non-rigid initial transform. A ValueError.
+    """
 
 
 class InvalidSettingsError(Error, ValueError):
-    """A setting out of range or contradicting another."""
+    """A setting out of range or contradicting another. A ValueError."""
 
 
 class FormatError(Error, ValueError):
-    """A file whose content is not valid for its format; the message names the file and the line
-    or byte where it broke."""
+    """A file whose content is not valid for its format; the message names the file and the line or
+    byte where it broke. A ValueError.
+    """
 
 
 class IoError(Error, OSError):
-    """A file that cannot be opened, read or written; the message names the path and the reason."""
+    """A file that cannot be opened, read or written; the message names the path and the system's
+    reason. An OSError.
+    """
 
 
 # ---- settings
@@ -59,69 +63,74 @@ class DistanceUnit(enum.Enum):
     """Unit of a Distance."""
 
     metres = 0
-    """Metres."""
+    """metres"""
     scaled = 1
-    """Fractions of the largest side of the joint bounding box of both clouds."""
+    """fractions of the largest side of the joint bounding box of both clouds (the paper's [0, 1]
+    space)
+    """
 
 
 class OptimizerType(enum.Enum):
     """Step rule of the paper's eq. 3."""
 
     sgd = 0
-    """Fixed step (the paper's vanilla SGD, alpha = 2)."""
+    """fixed step (the paper's vanilla SGD, alpha = 2)"""
     momentum = 1
-    """Heavy-ball momentum."""
+    """heavy-ball momentum"""
     rmsprop = 2
-    """RMSProp."""
+    """RMSProp"""
     adam = 3
-    """Adam (the paper's Adam-SGD; the default)."""
+    """Adam (the paper's Adam-SGD; the default)"""
     gauss_newton = 4
-    """Step pre-conditioned by the averaged mini-batch Gauss-Newton matrix."""
+    """step pre-conditioned by the averaged mini-batch Gauss-Newton matrix"""
 
 
 class ScalingOrigin(enum.Enum):
     """Origin of the scaled space, which is also the pivot of the rotation."""
 
     lower_corner = 0
-    """The paper: the lower corner of the joint box, points in [0, 1]."""
+    """the paper: the lower corner of the joint box, points in [0, 1]"""
     center = 1
-    """The centre of the joint box, points in [-0.5, 0.5] (the default)."""
+    """the centre of the joint box, points in [-0.5, 0.5] (the default)"""
 
 
 class CostType(enum.Enum):
     """Cost of a pair (source point moved to q, reference point r)."""
 
     point_to_point = 0
-    """|q - r|^2, the paper's (Besl-McKay); the default."""
+    """|q - r|^2, the paper's (Besl-McKay); the default"""
     point_to_plane = 1
-    """(n . (q - r))^2 with the reference normal n (Chen-Medioni)."""
+    """(n . (q - r))^2 with the reference normal n (Chen-Medioni)"""
     plane_to_plane = 2
-    """e^T (C_r + R C_s R^T)^-1 e with the plane covariances (GICP, Segal et al.)."""
+    """e^T (C_r + R C_s R^T)^-1 e with the plane covariances (GICP, Segal et al.)"""
 
 
 class KernelType(enum.Enum):
     """Robust kernel on each pair's squared residual."""
 
     none = 0
-    """No kernel (least squares); the default."""
+    """no kernel (least squares); the default"""
     huber = 1
-    """Huber."""
+    """Huber"""
     cauchy = 2
-    """Cauchy."""
+    """Cauchy"""
     geman_mcclure = 3
-    """Geman-McClure."""
+    """Geman-McClure"""
     welsch = 4
-    """Welsch."""
+    """Welsch"""
 
 
 class Distance:
     """A length with its unit: metres, or scaled units (1 = the largest side of the joint bounding
-    box of both clouds). Make one with Distance.metres(v) or Distance.scaled(v)."""
+    box of both clouds, the paper's [0, 1] space).
+
+    Make one with Distance.metres(v) or Distance.scaled(v).
+    """
 
     value: float
     """The length, in `unit`."""
     unit: DistanceUnit
-    """DistanceUnit.metres or DistanceUnit.scaled (assign 'm' or 'scaled' too)."""
+    """DistanceUnit.metres or DistanceUnit.scaled."""
 
     def __init__(self, value: float, unit: _UnitName = "scaled") -> None:
         """A distance of `value` in `unit` ('m', 'scaled' or a DistanceUnit; default 'scaled')."""
@@ -135,7 +144,8 @@ class Distance:
         """A distance in scaled units (fraction of the largest side of the joint box)."""
 
     def to_scaled(self, metres_per_unit: float) -> float:
-        """The value in scaled units, given the metres per scaled unit (RegistrationResult.scale_m)."""
+        """The value in scaled units, given the metres per scaled unit (RegistrationResult.scale_m).
+        """
 
     def __eq__(self, other: object) -> bool: ...
     def __copy__(self) -> Distance: ...
@@ -143,34 +153,43 @@ class Distance:
 
 
 class OptimizerSettings:
-    """Step rule of eq. 3 and its parameters (Settings.optimizer). A new OptimizerSettings() has
-    the C++ struct's defaults (fixed step, learning rate 2); Settings() uses Adam with 0.01."""
+    """Step rule of eq. 3 and its parameters (Settings.optimizer)."""
 
     type: OptimizerType
-    """Step rule (assign a name too: 'sgd', 'momentum', 'rmsprop', 'adam', 'gauss-newton').
-    Settings() default: OptimizerType.adam."""
+    """Step rule of eq. 3 (sgd: fixed step; gauss-newton: A = inverse of the averaged mini-batch
+    Gauss-Newton matrix); also sets the learning rate to the rule's own unless one is given
+    (OptimizerType or one of its names). Keyword optimizer=. Default OptimizerType.adam.
+    """
     learning_rate: float
-    """alpha of eq. 3, scaled units per unit gradient. Settings() default 0.01 (Adam); the paper's
-    fixed step uses 2; Gauss-Newton: fraction of a Newton step, 1."""
+    """Step size alpha (adaptive rules: a length per step; sgd, momentum: a gradient multiplier;
+    gauss-newton: a fraction of the Newton step), scaled units in [1e-06, 10000]. Keyword
+    learning_rate=. Default 0.01.
+    """
     momentum: float
-    """Momentum: velocity decay, in [0, 1). Default 0.9."""
+    """Momentum: velocity decay, in [0, 1). Keyword momentum=. Default 0.9."""
     beta1: float
-    """Adam: decay of the mean of gradients, in [0, 1). Default 0.9."""
+    """Adam: decay of the gradient mean, in [0, 1). Keyword beta1=. Default 0.9."""
     beta2: float
-    """Adam: decay of the mean of squared gradients, in [0, 1). Default 0.999."""
+    """Adam: decay of the squared-gradient mean, in [0, 1). Keyword beta2=. Default 0.999."""
     rms_decay: float
-    """RMSProp: decay of the mean of squared gradients, in [0, 1). Default 0.9."""
+    """RMSProp: decay of the squared-gradient mean, in [0, 1). Keyword rms_decay=. Default 0.9."""
     epsilon: float
-    """Adam/RMSProp: added to the root mean square, scaled units. Default 1e-8."""
+    """Adam/RMSProp: added to the gradient RMS, scaled units in (0, 1]. Keyword epsilon=. Default
+    1e-08.
+    """
     hessian_decay: float
-    """Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices, in
-    [0, 1). Default 0.9."""
+    """Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices, in [0,
+    1). Keyword hessian_decay=. Default 0.9.
+    """
     damping: float
-    """Gauss-Newton: Levenberg damping relative to the mean diagonal. Default 1e-3."""
+    """Gauss-Newton step: Levenberg damping, relative to the mean diagonal of the averaged matrix
+    (batch methods: the initial Levenberg-Marquardt damping), in [0, 100]. Keyword damping=.
+    Default 0.001.
+    """
 
     def __init__(self) -> None: ...
     def validate(self) -> None:
-        """Raises InvalidSettingsError naming the first invalid value."""
+        """Raises InvalidSettingsError (a ValueError) naming the first invalid value."""
 
     def __eq__(self, other: object) -> bool: ...
     def __copy__(self) -> OptimizerSettings: ...
@@ -179,21 +198,31 @@ class OptimizerSettings:
 
 class ConvergenceSettings:
     """When a stage is stationary: Hotelling's T^2 test on the window's mini-batch gradients and a
-    path-efficiency guard, or an absolute tolerance on every step (Settings.convergence)."""
+    path-efficiency guard, or an absolute tolerance on every step (Settings.convergence).
+    """
 
     window: int
-    """Iterations per test window, >= 8; also the length of the final iterate average. Default 20."""
+    """Convergence: iterations per test window (a stage ends after a window whose mean mini-batch
+    gradient is not significantly non-zero); also the length of the final iterate average, in [8,
+    100000]. Keyword window=. Default 20.
+    """
     chi2: float
-    """Critical chi-square value (6 degrees of freedom) of the test; larger stops earlier.
-    Default 12.59 (95 %)."""
+    """Convergence: critical chi-square value (6 dof) of the Hotelling test on the window's mean
+    gradient; larger stops earlier, in (0, 1000]. Keyword chi2=. Default 12.59.
+    """
     max_path_efficiency: float
-    """Largest |sum of steps| / sum of |steps| of a stationary window, in (0, 1]. Default 0.5."""
+    """Convergence: a stationary window's net displacement over its path length must be at most this
+    (1 = straight travel, ~0.2 = jitter), in (0, 1]. Keyword path_efficiency=. Default 0.5.
+    """
     translation_tolerance: float
-    """A window whose steps all move the translation less than this (scaled units) ...
-    Default 1e-6."""
+    """Convergence: a window whose steps each move the translation less than this also ends a stage
+    (batch methods: an iteration that moves it less converges), scaled units in [0, 0.01].
+    Keyword translation_tolerance=. Default 1e-06.
+    """
     rotation_tolerance: float
-    """... and the angles less than this (sum of |d roll|, |d pitch|, |d yaw|, rad) is stationary.
-    Default 1e-6."""
+    """Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, |d yaw|; batch
+    methods: rotation angle), rad in [0, 0.01]. Keyword rotation_tolerance=. Default 1e-06.
+    """
 
     def __init__(self) -> None: ...
     def __eq__(self, other: object) -> bool: ...
@@ -203,16 +232,24 @@ class ConvergenceSettings:
 
 class RefinementSettings:
     """Refinement stages after the paper's coarse phase: each shrinks d_max to the data and decays
-    the step (Settings.refinement)."""
+    the step (Settings.refinement).
+    """
 
     stages: int
-    """Refinement stages after the coarse phase (0 = the paper's single phase). Default 3."""
+    """Refinement stages after the first stationary stage (0 = the paper's single phase), in [0,
+    100]. Keyword refine_stages=. Default 3.
+    """
     step_decay: float
-    """Step-size multiplier per stage, in (0, 1]. Default 0.5."""
+    """Refinement: step-size multiplier per stage, in [0.01, 1]. Keyword step_decay=. Default 0.5.
+    """
     distance_factor: float
-    """New d_max = factor x median pair distance of the stage. Default 3."""
+    """Refinement: new d_max = factor x median correspondence distance (below 1 it would reject most
+    pairs: use trim for that), in [1, 1000]. Keyword distance_factor=. Default 3.0.
+    """
     min_distance: Distance
-    """Floor of d_max. Default Distance.scaled(1e-4)."""
+    """Refinement: lower bound of d_max, a Distance in [1e-06, 10] scaled units or [1e-06, 1000000]
+    m. Keyword min_distance=. Default Distance.scaled(0.0001).
+    """
 
     def __init__(self) -> None: ...
     def __eq__(self, other: object) -> bool: ...
@@ -222,18 +259,23 @@ class RefinementSettings:
 
 class NeighborhoodSettings:
     """k-nearest neighbourhoods for the normals and covariances of the plane costs
-    (Settings.neighborhood)."""
+    (Settings.neighborhood).
+    """
 
     k: int
-    """Neighbours per point, the point included, in [3, 1000]. Default 20."""
+    """Plane costs: neighbours per point (itself included) for normals and covariances, in [3,
+    1000]. Keyword neighbors=. Default 20.
+    """
     num_threads: int
-    """Worker threads of the estimation; 0 = all cores (the same results for any count).
-    Default 0."""
+    """Worker threads of the estimation; 0 = all cores (the results are the same for any count).
+    Default 0.
+    """
     regularize: bool
     """Replace each covariance by the GICP plane model (unitless). Default True."""
     epsilon: float
-    """Variance along the normal in the plane model, relative to 1 in the plane, in (0, 1].
-    Default 1e-3."""
+    """Variance along the normal in the plane model, relative to 1 in the plane, in (0, 1]. Default
+    1e-3.
+    """
     @property
     def viewpoint(self) -> npt.NDArray[np.float64]:
         """Normals are flipped to face this point, (3,) array, metres. Default (0, 0, 0)."""
@@ -255,44 +297,65 @@ class Settings:
     """
 
     batch_size: int
-    """m of the paper: source points per mini-batch. Default 160."""
+    """Mini-batch size m, source points per iteration, in [1, 10000000]. Keyword batch_size=.
+    Default 160.
+    """
     max_correspondence_distance: Distance
-    """d_max: pairs farther apart are rejected. Default Distance.scaled(0.5)."""
+    """Correspondence rejection distance d_max, a Distance in [1e-06, 10] scaled units or [1e-06,
+    1000000] m. Keyword max_distance=. Default Distance.scaled(0.5).
+    """
     optimizer: OptimizerSettings
-    """Step rule and its parameters. Default Adam with learning rate 0.01."""
+    """OptimizerSettings. Default Adam with learning rate 0.01."""
     convergence: ConvergenceSettings
-    """Stationarity test."""
+    """ConvergenceSettings."""
     refinement: RefinementSettings
-    """Refinement stages."""
+    """RefinementSettings."""
     cost: CostType
-    """Cost of a pair (assign a name too: 'point-to-point', 'point-to-plane', 'plane-to-plane').
-    The plane costs need reference normals / covariances. Default CostType.point_to_point."""
+    """Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP) (CostType
+    or one of its names). Keyword cost=. Default CostType.point_to_point.
+    """
     kernel: KernelType
-    """Robust kernel on each pair's residual (assign a name too: 'none', 'huber', 'cauchy',
-    'geman-mcclure', 'welsch'). Default KernelType.none."""
+    """Robust kernel on the pair residuals (KernelType or one of its names). Keyword kernel=.
+    Default KernelType.none.
+    """
     kernel_scale: Distance
-    """Residual size where the kernel starts to down-weight. Default Distance.scaled(0.01)."""
+    """Kernel scale c, the residual size where down-weighting starts, a Distance in [1e-06, 10]
+    scaled units or [1e-06, 1000000] m. Keyword kernel_scale=. Default Distance.scaled(0.01).
+    """
     trim_ratio: float
-    """Keep only this fraction of each mini-batch's pairs, the closest ones (trimmed ICP, for
-    partial overlap), in (0, 1]. Default 1."""
+    """Keep only this fraction of the pairs (per mini-batch for SGD, per iteration for batch
+    methods), the closest ones: trimmed ICP for partial overlap, in [0.01, 1]. Keyword trim=.
+    Default 1.0.
+    """
     neighborhood: NeighborhoodSettings
-    """Neighbourhoods for the normals and covariances of the plane costs."""
+    """NeighborhoodSettings for the normals and covariances of the plane costs."""
     scaling_origin: ScalingOrigin
-    """Origin of the scaled space and pivot of the rotation (assign 'center' or 'lower_corner'
-    too). Default ScalingOrigin.center."""
+    """Origin of the scaled space and pivot of the rotation (lower-corner, also spelled corner: the
+    paper, points in [0, 1]; center: points in [-0.5, 0.5]) (ScalingOrigin or one of its names).
+    Keyword scaling_origin=. Default ScalingOrigin.center.
+    """
     max_iterations: int
-    """Iteration (mini-batch) limit; reaching it means not converged. Default 4000."""
+    """Iteration limit (mini-batches); reaching it reports 'not converged', in [1, 1000000000].
+    Keyword max_iterations=. Default 4000.
+    """
     seed: int
-    """Seed of the mini-batch sampler; same inputs and seed give the same result. Default 2019."""
+    """Seed of the mini-batch sampler (same seed, same result), in [0, 2^64-1]. Keyword seed=.
+    Default 2019.
+    """
     average_iterates: bool
-    """Return the mean of the final stage's iterates instead of the last one. Default True."""
+    """Return the mean of the window iterates of the final stage's stationary window (true) or the
+    last iterate (false). Keyword average=. Default True.
+    """
     evaluation_points: int
-    """Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000."""
+    """Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all, in [0,
+    4294967295]. Keyword evaluation_points=. Default 2000.
+    """
     record_trace: bool
-    """Fill RegistrationResult.trace. Default False."""
+    """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
     check_degeneracy: bool
-    """Check the final alignment for degenerate geometry (a plane, a corridor) and report it in
-    RegistrationResult.constraint_ratio / degenerate. Default True."""
+    """Check the final alignment for degenerate geometry (plane, corridor) and report it. Keyword
+    check_degeneracy=. Default True.
+    """
 
     def __init__(
         self,
@@ -372,7 +435,8 @@ class Settings:
     ) -> Settings:
         """The paper's settings: m = 160, d_max = 0.5 scaled, fixed step alpha = 2 ('sgd') or Adam
         0.01 ('adam'), no refinement, the last iterate, the lower-corner scaling origin; then the
-        keyword overrides."""
+        keyword overrides.
+        """
 
     def replace(
         self,
@@ -414,7 +478,7 @@ class Settings:
         """A copy with the flat keyword overrides of register() applied."""
 
     def validate(self) -> None:
-        """Raises InvalidSettingsError naming the first invalid setting."""
+        """Raises InvalidSettingsError (a ValueError) naming the first invalid setting."""
 
     def __eq__(self, other: object) -> bool: ...
     def __copy__(self) -> Settings: ...
@@ -427,43 +491,61 @@ class BatchSettings:
     their nearest reference point within d_max, then takes the closed-form SVD step
     (point-to-point) or one damped Gauss-Newton step (the plane costs).
 
-    BatchSettings(**overrides) is the default (point-to-point) with the batch keyword overrides of
-    register() applied; BatchSettings.icp(), .icp_plane() and .gicp() set the cost.
+    BatchSettings(**overrides) is the default (point-to-point) with the batch keyword overrides
+    of register() applied (max_distance, max_distance_unit, max_iterations, kernel, kernel_scale,
+    trim, neighbors, damping, translation_tolerance, rotation_tolerance, evaluation_points,
+    check_degeneracy, cost).
     """
 
     cost: CostType
-    """Cost of a pair (assign a name too). register(method=...) replaces it with the method's
-    cost. Default CostType.point_to_point."""
+    """Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP) (CostType
+    or one of its names). Keyword cost=. Default CostType.point_to_point.
+    """
     max_correspondence_distance: Distance
-    """d_max: pairs farther apart are rejected (scaled: fraction of the largest side of the joint
-    bounding box). Default Distance.scaled(0.05)."""
+    """Correspondence rejection distance d_max, a Distance in [1e-06, 10] scaled units or [1e-06,
+    1000000] m. Keyword max_distance=. Default Distance.scaled(0.05).
+    """
     kernel: KernelType
-    """Robust kernel on each pair's residual (assign a name too). Default KernelType.none."""
+    """Robust kernel on the pair residuals (KernelType or one of its names). Keyword kernel=.
+    Default KernelType.none.
+    """
     kernel_scale: Distance
-    """Residual size where the kernel starts to down-weight. Default Distance.scaled(0.01)."""
+    """Kernel scale c, the residual size where down-weighting starts, a Distance in [1e-06, 10]
+    scaled units or [1e-06, 1000000] m. Keyword kernel_scale=. Default Distance.scaled(0.01).
+    """
     trim_ratio: float
-    """Keep only this fraction of each iteration's pairs, the closest ones (trimmed ICP), in
-    (0, 1]. Default 1."""
+    """Keep only this fraction of the pairs (per mini-batch for SGD, per iteration for batch
+    methods), the closest ones: trimmed ICP for partial overlap, in [0.01, 1]. Keyword trim=.
+    Default 1.0.
+    """
     max_iterations: int
-    """Iteration limit (passes over the source); reaching it means not converged. Default 100."""
+    """Iteration limit (passes over the source); reaching it reports 'not converged', in [1,
+    1000000000]. Keyword max_iterations=. Default 100.
+    """
     translation_tolerance: float
-    """Converged when an iteration moves the translation less than this (scaled units) ...
-    Default 1e-5."""
+    """Converged when an iteration moves the translation less than this ..., scaled units in [0,
+    0.01]. Keyword translation_tolerance=. Default 1e-05.
+    """
     rotation_tolerance: float
-    """... and the rotation less than this (rotation angle, rad). Default 1e-5."""
+    """... and the rotation less than this (rotation angle), rad in [0, 0.01]. Keyword
+    rotation_tolerance=. Default 1e-05.
+    """
     initial_damping: float
-    """Initial Levenberg-Marquardt damping, relative to the mean diagonal of J^T J; 0 = plain
-    Gauss-Newton; unused by point-to-point. Default 1e-6."""
+    """icp-plane, gicp: initial Levenberg-Marquardt damping, relative to the mean diagonal of J^T J;
+    0 = Gauss-Newton, in [0, 100]. Keyword damping=. Default 1e-06.
+    """
     neighborhood: NeighborhoodSettings
-    """Neighbourhoods for the normals and covariances of the plane costs."""
+    """NeighborhoodSettings for the normals and covariances of the plane costs."""
     evaluation_points: int
-    """Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000."""
+    """Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all, in [0,
+    4294967295]. Keyword evaluation_points=. Default 2000.
+    """
     check_degeneracy: bool
-    """Check the final alignment for degenerate geometry and report it in
-    RegistrationResult.constraint_ratio / degenerate. Default True."""
+    """Check the final alignment for degenerate geometry (plane, corridor) and report it. Keyword
+    check_degeneracy=. Default True.
+    """
     record_trace: bool
-    """Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, pairs,
-    mean squared pair distance). Default False."""
+    """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
 
     def __init__(
         self,
@@ -483,9 +565,7 @@ class BatchSettings:
         record_trace: bool = ...,
         cost: _CostName = ...,
     ) -> None:
-        """The default settings (point-to-point ICP) with the batch keyword overrides applied
-        (see register(); damping sets initial_damping, trim trim_ratio, neighbors
-        neighborhood.k)."""
+        """The default settings (point-to-point ICP) with the batch keyword overrides applied."""
 
     @staticmethod
     def icp(**overrides: Any) -> BatchSettings:
@@ -493,19 +573,19 @@ class BatchSettings:
 
     @staticmethod
     def icp_plane(**overrides: Any) -> BatchSettings:
-        """Point-to-plane ICP (Chen-Medioni; Levenberg-Marquardt step), then the keyword
-        overrides."""
+        """Point-to-plane ICP (Chen-Medioni; Levenberg-Marquardt step), then the keyword overrides.
+        """
 
     @staticmethod
     def gicp(**overrides: Any) -> BatchSettings:
-        """Plane-to-plane GICP (Segal et al.; Levenberg-Marquardt step), then the keyword
-        overrides."""
+        """Plane-to-plane GICP (Segal et al.; Levenberg-Marquardt step), then the keyword overrides.
+        """
 
     def replace(self, **overrides: Any) -> BatchSettings:
         """A copy with the batch keyword overrides applied."""
 
     def validate(self) -> None:
-        """Raises InvalidSettingsError naming the first invalid setting."""
+        """Raises InvalidSettingsError (a ValueError) naming the first invalid setting."""
 
     def __eq__(self, other: object) -> bool: ...
     def __copy__(self) -> BatchSettings: ...
@@ -516,8 +596,9 @@ class BatchSettings:
 
 
 class ReferenceIndex:
-    """A KD-tree over a reference cloud, built once and reused by any number of registrations,
-    also from several threads at once (queries are read-only)."""
+    """A KD-tree over a reference cloud, built once and reused by any number of registrations, also
+    from several threads at once (queries are read-only).
+    """
 
     def __init__(
         self,
@@ -528,20 +609,14 @@ class ReferenceIndex:
         neighborhood: NeighborhoodSettings | None = None,
     ) -> None:
         """Builds the tree over an (N, 3) float32/float64 array of points in metres (copied once
-        into float32 storage; rows with a NaN or infinite coordinate are dropped and counted).
-
-        Args:
-            points: (N, 3) float32/float64 array, metres.
-            leaf_size: points per KD-tree leaf. Default 10.
-            cost: the cost the index will serve: 'point-to-plane' estimates the reference
-                normals, 'plane-to-plane' the covariances (and normals). Default 'point-to-point'.
-            neighborhood: how normals and covariances are estimated. Default None =
-                NeighborhoodSettings().
-
-        The GIL is released during the build; the index never changes afterwards: a
-        registration whose method needs normals ('sgd-plane', 'icp-plane', cost='point-to-plane')
-        or covariances ('sgd-gicp', 'gicp', cost='plane-to-plane') that the index lacks raises
-        InvalidInputError instead of adding them."""
+        into float32 storage; rows with a NaN or infinite coordinate are dropped and counted in
+        non_finite_dropped). leaf_size: points per KD-tree leaf, default 10. cost: the cost the
+        index will serve, default 'point-to-point'; 'point-to-plane' estimates the reference
+        normals, 'plane-to-plane' the covariances, with `neighborhood` (NeighborhoodSettings,
+        default None = NeighborhoodSettings()). The GIL is released during the build. The index
+        never changes afterwards: a registration whose method or cost needs normals or
+        covariances the index lacks raises InvalidInputError instead of adding them.
+        """
 
     def __len__(self) -> int: ...
     @property
@@ -555,49 +630,54 @@ class ReferenceIndex:
         """Wall time of the KD-tree build (and of the normals or covariances), milliseconds."""
     @property
     def has_normals(self) -> bool:
-        """Whether the reference has normals (cost 'point-to-plane' or 'plane-to-plane')."""
+        """Whether the reference has normals (built with cost='point-to-plane' or 'plane-to-plane').
+        """
     @property
     def has_covariances(self) -> bool:
-        """Whether the reference has covariances (cost 'plane-to-plane')."""
+        """Whether the reference has covariances (built with cost='plane-to-plane')."""
     @property
     def bounding_box(self) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(min, max) corners of the axis-aligned bounding box, two (3,) float64 arrays, metres."""
 
 
 class Trace:
-    """Per-iteration record of a registration (record_trace=True), one element per iteration."""
+    """Per-iteration record of a registration (Settings.record_trace), one array element per iteration.
+    """
 
     @property
     def iteration(self) -> npt.NDArray[np.int64]:
-        """(K,) iteration number."""
+        """(K,) int64, iteration number."""
     @property
     def points_processed(self) -> npt.NDArray[np.int64]:
-        """(K,) source points drawn so far."""
+        """(K,) int64, source points drawn so far."""
     @property
     def T_reference_source(self) -> npt.NDArray[np.float64]:
-        """(K, 4, 4) metric pose after each iteration."""
+        """(K, 4, 4) float64, metric pose after each iteration."""
     @property
     def step_size(self) -> npt.NDArray[np.float64]:
-        """(K,) effective learning rate of each iteration (scaled units)."""
+        """(K,) float64, effective learning rate of each iteration."""
     @property
     def max_distance_m(self) -> npt.NDArray[np.float64]:
-        """(K,) d_max used, metres."""
+        """(K,) float64, d_max used, metres."""
     @property
     def inliers(self) -> npt.NDArray[np.int64]:
-        """(K,) pairs kept in each mini-batch."""
+        """(K,) int64, pairs kept in each mini-batch."""
     @property
     def cost(self) -> npt.NDArray[np.float64]:
-        """(K,) mini-batch cost F, scaled units^2."""
+        """(K,) float64, mini-batch cost F, scaled units^2."""
     def __len__(self) -> int: ...
 
 
 class RegistrationResult:
-    """What register() returns: every field of the C++ RegistrationResult, plus the point counts
-    and the KD-tree build time."""
+    """What register() returns: the transform, why it stopped, the work done and the final inlier
+    statistics (every field of the C++ RegistrationResult, plus the point counts and the KD-tree
+    build time).
+    """
 
     @property
     def T_reference_source(self) -> npt.NDArray[np.float64]:
-        """(4, 4), metres: maps source points into the reference frame, p_ref = R @ p_src + t."""
+        """(4, 4) float64, metres: maps source points into the reference frame, p_ref = R @ p_src + t.
+        """
     @property
     def converged(self) -> bool:
         """True if the convergence test passed after all refinement stages."""
@@ -609,16 +689,16 @@ class RegistrationResult:
         """One line on why it stopped."""
     @property
     def iterations(self) -> int:
-        """Mini-batches processed."""
+        """Mini-batches (batch methods: passes over the source) processed."""
     @property
     def points_processed(self) -> int:
-        """Source points drawn (iterations x batch size)."""
+        """Source points paired (SGD: iterations x batch size)."""
     @property
     def stages(self) -> int:
         """Stationary stages completed."""
     @property
     def evaluated_points(self) -> int:
-        """Source points (strided sample) in the final inlier statistics."""
+        """Source points (spread evenly) in the final inlier statistics."""
     @property
     def inliers(self) -> int:
         """Of those, with a reference point within the final d_max."""
@@ -640,15 +720,19 @@ class RegistrationResult:
     @property
     def constraint_ratio(self) -> float:
         """Smallest over largest eigenvalue of the point-to-plane information matrix of the final
-        inlier pairs (scaled space); near 0, some motion is not constrained by the data."""
+        inlier pairs (scaled space); near 0, some motion is not constrained by the data (with
+        check_degeneracy).
+        """
     @property
     def degenerate(self) -> bool:
-        """constraint_ratio below the threshold: the transform is not trustworthy along some
-        motion (see message)."""
+        """constraint_ratio below the threshold: the transform is not trustworthy along some motion
+        (see message).
+        """
     @property
     def build_ms(self) -> float:
         """Wall time of the KD-tree build (and reference normals/covariances) for an array
-        reference, milliseconds (0 for a ReferenceIndex)."""
+        reference, milliseconds (0 for a ReferenceIndex).
+        """
     @property
     def source_points(self) -> int:
         """Finite source points used."""
@@ -663,7 +747,7 @@ class RegistrationResult:
         """Reference rows dropped for a NaN or infinite coordinate."""
     @property
     def trace(self) -> Trace:
-        """Per-iteration trace; empty unless record_trace=True."""
+        """Per-iteration Trace; empty unless record_trace=True."""
 
 
 def register(
@@ -707,85 +791,75 @@ def register(
     evaluation_points: int = ...,
     record_trace: bool = ...,
 ) -> RegistrationResult:
-    """Registers `source` to `reference` with SGD-ICP or a batch ICP method; the GIL is released
-    while it runs.
+    """Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
-    Args:
-        source: (N, 3) float32/float64 array, metres, any memory layout: the cloud that moves.
-            Copied once into float32; rows with a NaN or inf are dropped and counted.
-        reference: (M, 3) array like `source`, or a ReferenceIndex (built once, reusable, also
-            from several threads at once). A ReferenceIndex must have the normals / covariances
-            of the method's cost: build it with ReferenceIndex(points, cost=...).
-        init: initial T_reference_source, (4, 4) rigid; default None = identity.
-        settings: base settings: a Settings for the SGD methods (default None = Settings()), a
-            BatchSettings for the batch methods (default None = BatchSettings(); the method sets
-            its cost).
-        method: the CLI's --method. 'sgd' (SGD-ICP with the settings' cost, point-to-point by
-            default), 'sgd-plane' / 'sgd-gicp' (SGD-ICP on point-to-plane / plane-to-plane),
-            'icp' (batch point-to-point, closed-form SVD step), 'icp-plane' / 'gicp' (batch
-            point-to-plane / plane-to-plane, Levenberg-Marquardt). All but 'sgd' set the cost
-            (cost= is then an error). Default 'sgd'.
+    Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
+    into the reference frame: p_ref = R @ p_src + t.
 
-        The batch methods take only max_distance (default 0.05 scaled), max_distance_unit,
-        max_iterations (100), kernel, kernel_scale, trim, neighbors, damping (the initial
-        Levenberg-Marquardt damping, default 1e-6), translation_tolerance (1e-5 scaled units),
-        rotation_tolerance (1e-5 rad), evaluation_points, check_degeneracy and record_trace; the
-        defaults below are those of the SGD methods.
+    Parameters
+    ----------
+    source : (N, 3) float32 or float64 array, metres
+        The cloud that moves. Any memory layout (C, Fortran, strided slices). It is copied once into
+        the library's float32 storage; rows with a NaN or infinite coordinate are dropped and
+        counted
+        (result.source_non_finite_dropped).
+    reference : (M, 3) array like `source`, or ReferenceIndex
+        The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
+        also from several threads at once; an array builds one for this call (result.build_ms),
+        with the normals or covariances the cost needs.
+    init : (4, 4) array or None, default None (identity)
+        Initial T_reference_source; must be rigid.
+    settings : Settings, BatchSettings or None, default None
+        The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
+        the batch methods (None = BatchSettings(), whose cost the method sets).
+    method : str, default 'sgd'
+        The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-point by default),
+        'sgd-plane' / 'sgd-gicp' (SGD-ICP on point-to-plane / plane-to-plane), 'icp' (batch
+        point-to-point, closed-form SVD step), 'icp-plane' (batch point-to-plane) or 'gicp' (batch
+        plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
+        error). An unknown name raises InvalidSettingsError.
+    **overrides
+        Flat keyword settings applied on top of `settings`, named like the CLI's options (the
+        library's settings table), each with its default and valid range. A distance given as a
+        number
+        is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
+        optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
+        For the batch methods (any other keyword raises TypeError):
+        max_distance (Distance.scaled(0.05)), max_iterations (100, [1, 1000000000]),
+        damping (1e-06, [0, 100]), translation_tolerance (1e-05, [0, 0.01]),
+        rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
+        cost (CostType.point_to_point), kernel (KernelType.none),
+        kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
+        check_degeneracy (True), record_trace (False).
+        For the SGD methods:
+        optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
+        batch_size (160, [1, 10000000]), max_distance (Distance.scaled(0.5)),
+        max_iterations (4000, [1, 1000000000]), seed (2019, [0, 2^64-1]), momentum (0.9, [0, 1)),
+        beta1 (0.9, [0, 1)), beta2 (0.999, [0, 1)), rms_decay (0.9, [0, 1)),
+        epsilon (1e-08, (0, 1]), hessian_decay (0.9, [0, 1)), damping (0.001, [0, 100]),
+        window (20, [8, 100000]), chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
+        translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]),
+        refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
+        min_distance (Distance.scaled(0.0001)), average (True),
+        scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
+        cost (CostType.point_to_point), kernel (KernelType.none),
+        kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
+        check_degeneracy (True), record_trace (False).
+        See docs/python.md for the settings each one sets.
 
-        batch_size: source points per mini-batch (m). Default 160.
-        optimizer: 'sgd', 'momentum', 'rmsprop', 'adam' or 'gauss-newton'. Default 'adam'.
-            Also sets learning_rate to that rule's usual value (sgd 2, momentum 2 * (1 - momentum),
-            adam/rmsprop 0.01, gauss-newton 1) unless learning_rate is given too.
-        learning_rate: step size alpha, scaled units. Default 0.01.
-        max_distance: d_max, pairs farther apart are rejected; a number in max_distance_unit or a
-            Distance. Default 0.5 (scaled).
-        max_distance_unit: unit of max_distance, min_distance and kernel_scale given as numbers:
-            'scaled' (fraction of the largest side of the joint bounding box) or 'm'. Default
-            'scaled'.
-        max_iterations: iteration limit; reaching it means not converged. Default 4000.
-        seed: seed of the mini-batch sampler. Default 2019.
-        momentum: heavy-ball velocity decay, [0, 1). Default 0.9.
-        beta1: Adam gradient-mean decay, [0, 1). Default 0.9.
-        beta2: Adam squared-gradient-mean decay, [0, 1). Default 0.999.
-        rms_decay: RMSProp squared-gradient-mean decay, [0, 1). Default 0.9.
-        epsilon: Adam/RMSProp denominator offset, scaled units. Default 1e-8.
-        hessian_decay: Gauss-Newton matrix averaging, [0, 1). Default 0.9.
-        damping: Gauss-Newton relative Levenberg damping. Default 1e-3.
-        window: iterations per convergence test window, >= 8. Default 20.
-        chi2: critical chi-square value of the test; larger stops earlier. Default 12.59.
-        path_efficiency: largest net/total path ratio of a stationary window, (0, 1]. Default 0.5.
-        translation_tolerance: absolute stationarity test on each step, scaled units. Default 1e-6.
-        rotation_tolerance: ... and on the angles, rad. Default 1e-6.
-        refine_stages: refinement stages after the coarse phase (0 = the paper). Default 3.
-        step_decay: step multiplier per refinement stage, (0, 1]. Default 0.5.
-        distance_factor: refined d_max = factor x median pair distance. Default 3.
-        min_distance: floor of d_max; a number in max_distance_unit or a Distance. Default 1e-4
-            (scaled).
-        average: return the mean of the final stage's iterates (True) or the last one. Default
-            True.
-        scaling_origin: 'center' or 'lower_corner' (the paper). Default 'center'.
-        cost: 'point-to-point' (the paper), 'point-to-plane' or 'plane-to-plane' (GICP). The plane
-            costs need reference normals / covariances: estimated here for an array reference, or
-            by ReferenceIndex(points, cost=...). Default 'point-to-point'.
-        kernel: robust kernel 'none', 'huber', 'cauchy', 'geman-mcclure' or 'welsch'. Default
-            'none'.
-        kernel_scale: residual size where the kernel starts to down-weight; a number in
-            max_distance_unit or a Distance. Default 0.01 (scaled).
-        trim: keep this fraction of each mini-batch's pairs, the closest (trimmed ICP), (0, 1].
-            Default 1.
-        neighbors: neighbours per point for normals and covariances, [3, 1000]. Default 20.
-        check_degeneracy: report degenerate geometry in result.constraint_ratio / degenerate.
-            Default True.
-        evaluation_points: source points for the final inlier statistics, 0 = all. Default 2000.
-        record_trace: fill result.trace. Default False.
+    The GIL is released during the registration (and the KD-tree build), so registrations in
+    several Python threads run in parallel.
 
-    Raises:
-        InvalidInputError: (a ValueError) wrong shape or dtype, no finite points, fewer source
-            points than batch_size, a non-rigid init, a ReferenceIndex without the normals /
-            covariances of the method's cost.
-        InvalidSettingsError: (a ValueError) an invalid setting or an unknown method.
-        TypeError: an unknown keyword, a keyword of the other solver, or a value of the wrong
-            type.
+    Raises
+    ------
+    InvalidInputError (ValueError)
+        A wrong shape or dtype, no finite points, fewer source points than batch_size, a non-rigid
+        init, a ReferenceIndex without the normals or covariances of the method's cost (build it
+        with ReferenceIndex(points, cost=...)).
+    InvalidSettingsError (ValueError)
+        An invalid setting or method name.
+    TypeError
+        An unknown keyword, a keyword of the other solver, or a value of the wrong type.
     """
 
 
@@ -793,35 +867,46 @@ def register(
 
 
 def voxel_downsample(points: _Points, voxel_size_m: float) -> npt.NDArray[np.float32]:
-    """One point per occupied cubic voxel of side voxel_size_m (metres): the centroid of the
-    points in it, in the order of each voxel's first point (deterministic).
+    """One point per occupied cubic voxel: the centroid of the points in it.
 
-    Args:
-        points: (N, 3) float32/float64 array, metres; rows with a NaN or inf are dropped first.
-            May be empty.
-        voxel_size_m: voxel side, metres, positive and finite.
+    Parameters
+    ----------
+    points : (N, 3) float32 or float64 array, metres
+        Any memory layout; rows with a NaN or infinite coordinate are dropped first. May be empty.
+    voxel_size_m : float
+        Side of the voxels, metres, positive. Voxel (i, j, l) holds the points with
+        floor(x / voxel_size_m) = i, etc.
 
-    Returns:
-        (M, 3) float32 array, metres, M <= N.
+    Returns
+    -------
+    (M, 3) float32 array, metres, M <= N: in the order of each voxel's first point in the input
+    (deterministic). The GIL is released while it runs.
 
-    Raises:
-        InvalidSettingsError: (a ValueError) voxel_size_m not positive and finite, or too small.
-        InvalidInputError: (a ValueError) not an (N, 3) float32/float64 array.
+    Raises
+    ------
+    InvalidSettingsError (ValueError)
+        voxel_size_m not positive and finite, or so small that voxel indices overflow.
+    InvalidInputError (ValueError)
+        Not an (N, 3) float32/float64 array.
     """
 
 
 def random_downsample(points: _Points, count: int, seed: int = 2019) -> npt.NDArray[np.float32]:
-    """`count` distinct points chosen uniformly at random without replacement, in input order.
+    """`count` distinct points chosen uniformly at random without replacement.
 
-    Args:
-        points: (N, 3) float32/float64 array, metres; rows with a NaN or inf are dropped first.
-            May be empty.
-        count: points to keep, >= 0; count >= N keeps all.
-        seed: seed of the draw; the same input, count and seed give the same points on any
-            platform. Default 2019.
+    Parameters
+    ----------
+    points : (N, 3) float32 or float64 array, metres
+        Any memory layout; rows with a NaN or infinite coordinate are dropped first. May be empty.
+    count : int
+        Points to keep, >= 0; count >= N returns all the (finite) points.
+    seed : int, default 2019
+        Seed of the draw (std::mt19937_64): the same points, count and seed give the same result on
+        any platform.
 
-    Returns:
-        (min(count, N), 3) float32 array, metres.
+    Returns
+    -------
+    (min(count, N), 3) float32 array, metres, in input order. The GIL is released while it runs.
     """
 
 
@@ -832,21 +917,34 @@ def estimate_normals(
     *,
     viewpoint: npt.ArrayLike | None = None,
 ) -> npt.NDArray[np.float32]:
-    """Unit normals (PCA of the k nearest neighbours, the point included), flipped to face
-    `viewpoint`; (0, 0, 0) for degenerate (identical or collinear) neighbourhoods.
+    """Unit normals from the k nearest neighbours of every point.
 
-    Args:
-        points: (N, 3) float32/float64 array, metres; every row must be finite.
-        k: neighbours per point, in [3, 1000]. Default 20.
-        num_threads: worker threads, 0 = all cores (same results for any count). Default 0.
-        viewpoint: (3,) point in metres the normals face; None = the origin. Default None.
+    The normal is the eigenvector of the smallest eigenvalue of the neighbourhood's covariance
+    (PCA),
+    flipped to face `viewpoint`. Degenerate neighbourhoods (all points identical or collinear) have
+    no surface: their normal is (0, 0, 0). The results are the same for any thread count.
 
-    Returns:
-        (N, 3) float32 array, one normal per input row.
+    Parameters
+    ----------
+    points : (N, 3) float32 or float64 array, metres
+        Any memory layout; every row must be finite (one normal is returned per row).
+    k : int, default 20
+        Neighbours per point, the point itself included, in [3, 1000].
+    num_threads : int, default 0
+        Worker threads, 0 = all cores, at most 1024. The GIL is released while it runs.
+    viewpoint : (3,) array or None, default None (the origin)
+        Normals are flipped to face this point (metres): n . (viewpoint - p) >= 0.
 
-    Raises:
-        InvalidInputError: (a ValueError) bad array, no rows, or a non-finite row.
-        InvalidSettingsError: (a ValueError) k or num_threads out of range.
+    Returns
+    -------
+    (N, 3) float32 array of unit normals (or zero rows), one per input row.
+
+    Raises
+    ------
+    InvalidInputError (ValueError)
+        Not an (N, 3) float32/float64 array, no rows, or a non-finite row.
+    InvalidSettingsError (ValueError)
+        k or num_threads out of range.
     """
 
 
@@ -858,23 +956,36 @@ def estimate_covariances(
     regularize: bool = True,
     epsilon: float = 1e-3,
 ) -> npt.NDArray[np.float32]:
-    """Local covariances of the k nearest neighbours (the point included): raw (1/n, m^2) or, with
-    regularize=True, the unitless GICP plane model V diag(epsilon, 1, 1) V^T (identity for
-    degenerate neighbourhoods).
+    """Local covariances from the k nearest neighbours of every point.
 
-    Args:
-        points: (N, 3) float32/float64 array, metres; every row must be finite.
-        k: neighbours per point, in [3, 1000]. Default 20.
-        num_threads: worker threads, 0 = all cores (same results for any count). Default 0.
-        regularize: return the plane model instead of the raw covariance. Default True.
-        epsilon: variance along the normal in the plane model, in (0, 1]. Default 1e-3.
+    Raw covariance: (1/n) sum (q - mean)(q - mean)^T over the n = min(k, N) neighbours, in m^2.
+    With regularize=True (the default, as GICP uses them) each is replaced by the unitless plane
+    model V diag(epsilon, 1, 1) V^T, V its eigenvectors (smallest first); degenerate neighbourhoods
+    then get the identity. The results are the same for any thread count.
 
-    Returns:
-        (N, 3, 3) float32 array of symmetric matrices, one per input row.
+    Parameters
+    ----------
+    points : (N, 3) float32 or float64 array, metres
+        Any memory layout; every row must be finite (one covariance is returned per row).
+    k : int, default 20
+        Neighbours per point, the point itself included, in [3, 1000].
+    num_threads : int, default 0
+        Worker threads, 0 = all cores, at most 1024. The GIL is released while it runs.
+    regularize : bool, default True
+        Return the GICP plane model (unitless) instead of the raw covariance (m^2).
+    epsilon : float, default 1e-3
+        Variance along the normal in the plane model, relative to 1 in the plane, in (0, 1].
 
-    Raises:
-        InvalidInputError: (a ValueError) bad array, no rows, or a non-finite row.
-        InvalidSettingsError: (a ValueError) k, num_threads or epsilon out of range.
+    Returns
+    -------
+    (N, 3, 3) float32 array of symmetric matrices, one per input row.
+
+    Raises
+    ------
+    InvalidInputError (ValueError)
+        Not an (N, 3) float32/float64 array, no rows, or a non-finite row.
+    InvalidSettingsError (ValueError)
+        k, num_threads or epsilon out of range.
     """
 
 
@@ -886,7 +997,7 @@ class ReadResult:
 
     @property
     def points(self) -> npt.NDArray[np.float32]:
-        """(N, 3) finite points, in file order, metres."""
+        """(N, 3) float32 array of the finite points, in file order, metres."""
     @property
     def points_in_file(self) -> int:
         """Points the file declares or contains (= N + non_finite_dropped)."""
@@ -900,38 +1011,25 @@ class ReadResult:
 
 def read_point_cloud(path: _Path, format: str = "auto") -> ReadResult:
     """Reads the x y z of every point of a file (PCD, PLY, KITTI .bin, .xyz/.txt/.csv, ASCII VTK,
-    .f32; docs/io.md).
-
-    Args:
-        path: the file.
-        format: 'auto' (from the extension, the default), 'pcd', 'ply', 'kitti_bin', 'xyz', 'vtk'
-            or 'f32'.
-
-    Raises:
-        IoError: (an OSError) the file cannot be opened or read.
-        FormatError: (a ValueError) the content is not valid for its format.
+    .f32; docs/io.md) into a ReadResult. format: 'auto' (from the extension, the default), 'pcd',
+    'ply', 'kitti_bin', 'xyz', 'vtk' or 'f32'. Points with a NaN or infinite coordinate are
+    dropped and counted. Raises IoError (OSError) or FormatError (ValueError).
     """
 
 
 def read_points(path: _Path, format: str = "auto") -> npt.NDArray[np.float32]:
     """Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points; see
-    read_point_cloud for the formats, the counts and the errors."""
+    read_point_cloud for the formats, the counts and the errors.
+    """
 
 
 def write_points(
     path: _Path, points: _Points, format: str = "auto", encoding: str = "binary"
 ) -> None:
-    """Writes an (N, 3) float32/float64 array (converted to float32) as PLY, PCD or XYZ.
-
-    Args:
-        path: the file; its extension chooses the format unless `format` is given.
-        points: (N, 3) float32/float64 array, metres.
-        format: 'auto' (default), 'ply', 'pcd' or 'xyz'.
-        encoding: 'binary' (default) or 'ascii'; XYZ is always text.
-
-    Raises:
-        IoError: (an OSError) the file cannot be written.
-        FormatError: (a ValueError) an unknown or read-only format.
+    """Writes an (N, 3) float32/float64 array (converted to float32) as PLY, PCD or XYZ, chosen from
+    the extension unless format ('ply', 'pcd', 'xyz') is given. encoding: 'binary' (default) or
+    'ascii' (XYZ is always text). Reading the file back gives the same float32 values. Raises
+    IoError (OSError) or FormatError (ValueError).
     """
 
 
@@ -948,4 +1046,5 @@ def rotation_error_geodesic(T_est: _Transform, T_gt: _Transform) -> float:
 
 def rotation_error_euler_sum(T_est: _Transform, T_gt: _Transform) -> float:
     """The paper's rotation error: |d roll| + |d pitch| + |d yaw| of two (4, 4) transforms, each
-    wrapped to (-pi, pi], radians."""
+    wrapped to (-pi, pi], radians.
+    """

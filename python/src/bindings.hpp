@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "sgdicp/batch_icp.hpp"
+#include "sgdicp/methods.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/registration.hpp"
 
@@ -80,6 +81,12 @@ void bind_settings(py::module_& m);
 /// applies to the SGD methods only, and InvalidSettingsError for an invalid value.
 [[nodiscard]] BatchSettings with_batch_overrides(BatchSettings base, const py::dict& overrides,
                                                  std::string_view method);
+
+/// "name (default, range), ..." for every keyword of a solver, wrapped at 96 columns after
+/// `indent`: the keyword lists of register()'s docstring. `core` is the module, with the settings
+/// classes bound.
+[[nodiscard]] std::string keyword_summary(const py::module_& core, Solver solver,
+                                          std::string_view indent);
 
 // ---- preprocessing (preprocessing.cpp)
 

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -15,10 +16,11 @@
 #include "bindings.hpp"
 #include "sgdicp/batch_icp.hpp"
 #include "sgdicp/error.hpp"
-#include "sgdicp/features.hpp"
 #include "sgdicp/io.hpp"
+#include "sgdicp/methods.hpp"
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/preprocessing.hpp"
 #include "sgdicp/registration.hpp"
 
 #ifndef SGDICP_VERSION
@@ -117,7 +119,7 @@ std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, std::size_t
       SharedIndex{std::move(index), converted.non_finite_dropped, ms});
 }
 
-/// The error of check_reference_features, in the words of the Python API.
+/// The error of check_reference_prepared, in the words of the Python API.
 void check_prepared(const SharedIndex& shared, CostType cost) {
   const PointCloud& cloud = shared.index.cloud();
   if ((needs_reference_normals(cost) && !cloud.has_normals()) ||
@@ -143,22 +145,8 @@ struct Trace {
 };
 
 struct Result {
+  RegistrationResult fields;  ///< the C++ result (its trace moved into `trace`)
   py::array_t<double> T_reference_source;
-  bool converged = false;
-  std::string stop_reason;
-  std::string message;
-  std::size_t iterations = 0;
-  std::size_t points_processed = 0;
-  std::size_t stages = 0;
-  std::size_t evaluated_points = 0;
-  std::size_t inliers = 0;
-  double inlier_ratio = 0.0;
-  double inlier_rmse_m = 0.0;
-  double final_max_distance_m = 0.0;
-  double scale_m = 0.0;
-  double time_ms = 0.0;
-  double constraint_ratio = 0.0;
-  bool degenerate = false;
   double build_ms = 0.0;
   std::size_t source_points = 0;
   std::size_t source_non_finite_dropped = 0;
@@ -198,60 +186,23 @@ Trace make_trace(const std::vector<TraceEntry>& entries) {
   return t;
 }
 
-Result make_result(const RegistrationResult& r) {
+Result make_result(RegistrationResult r) {
   Result out;
   out.T_reference_source = array_from_matrix(r.T_reference_source);
-  out.converged = r.converged;
-  out.stop_reason = std::string(to_string(r.stop_reason));
-  out.message = r.message;
-  out.iterations = r.iterations;
-  out.points_processed = r.points_processed;
-  out.stages = r.stages;
-  out.evaluated_points = r.evaluated_points;
-  out.inliers = r.inliers;
-  out.inlier_ratio = r.inlier_ratio;
-  out.inlier_rmse_m = r.inlier_rmse_m;
-  out.final_max_distance_m = r.final_max_distance_m;
-  out.scale_m = r.scale_m;
-  out.time_ms = r.time_ms;
-  out.constraint_ratio = r.constraint_ratio;
-  out.degenerate = r.degenerate;
   out.trace = make_trace(r.trace);
+  r.trace.clear();
+  out.fields = std::move(r);
   return out;
 }
 
 // ---- register
 
-/// A --method of the CLI: the solver and, but for "sgd" (whose cost is the settings'), the cost.
-struct Method {
-  std::string name;
-  bool stochastic = true;
-  std::optional<CostType> cost;
-};
-
-Method method_from_object(const py::handle& value) {
+/// A --method of the CLI (methods.hpp), by name.
+const Method& method_from_object(const py::handle& value) {
   if (!py::isinstance<py::str>(value)) {
-    throw py::type_error(
-        "method must be a str ('sgd', 'sgd-plane', 'sgd-gicp', 'icp', "
-        "'icp-plane' or 'gicp'), got " +
-        type_name(value));
+    throw py::type_error("method must be a str (" + method_list() + "), got " + type_name(value));
   }
-  std::string name = value.cast<std::string>();
-  std::replace(name.begin(), name.end(), '_', '-');
-  Method m{name, name.rfind("sgd", 0) == 0, std::nullopt};
-  if (name == "sgd") return m;
-  if (name == "sgd-plane" || name == "icp-plane") {
-    m.cost = CostType::point_to_plane;
-  } else if (name == "sgd-gicp" || name == "gicp") {
-    m.cost = CostType::plane_to_plane;
-  } else if (name == "icp") {
-    m.cost = CostType::point_to_point;
-  } else {
-    throw InvalidSettingsError("unknown method '" + value.cast<std::string>() +
-                               "' (expected 'sgd', 'sgd-plane', 'sgd-gicp', 'icp', 'icp-plane' "
-                               "or 'gicp')");
-  }
-  return m;
+  return method_from_string(value.cast<std::string>());
 }
 
 /// A copy of `settings` (a Settings), or the defaults for None.
@@ -262,7 +213,7 @@ SgdSettings settings_or_default(const py::handle& settings, const Method& method
                          (py::isinstance<BatchSettings>(settings)
                               ? " (a BatchSettings is for method='icp', 'icp-plane' or 'gicp'; "
                                 "method='" +
-                                    method.name + "' takes a Settings)"
+                                    std::string(method.name) + "' takes a Settings)"
                               : std::string()));
   }
   return settings.cast<SgdSettings>();
@@ -273,13 +224,13 @@ BatchSettings batch_settings_or_default(const py::handle& settings, const Method
   if (settings.is_none()) return BatchSettings{};
   if (!py::isinstance<BatchSettings>(settings)) {
     throw py::type_error("settings must be a sgd_icp.BatchSettings or None for the batch method '" +
-                         method.name + "', got " + type_name(settings));
+                         std::string(method.name) + "', got " + type_name(settings));
   }
   return settings.cast<BatchSettings>();
 }
 
-/// Registration with either solver: the index (given, or built with the features `cost` needs),
-/// then `run(index)` with the GIL released.
+/// Registration with either solver: the index (given, or built with the normals or covariances
+/// `cost` needs), then `run(index)` with the GIL released.
 template <typename Run>
 Result register_with(const ConvertedCloud& src, const py::handle& reference, CostType cost,
                      const NeighborhoodSettings& neighborhood, Run run) {
@@ -311,12 +262,12 @@ Result register_with(const ConvertedCloud& src, const py::handle& reference, Cos
 Result register_clouds(const py::handle& source, const py::handle& reference,
                        const py::handle& init, const py::handle& settings, const py::handle& method,
                        const py::kwargs& overrides) {
-  const Method m = method_from_object(method);
+  const Method& m = method_from_object(method);
   if (m.cost && overrides.contains("cost")) {
-    throw InvalidSettingsError("method='" + m.name +
+    throw InvalidSettingsError("method='" + std::string(m.name) +
                                "' sets the cost; drop cost= (or use method='sgd' with cost=)");
   }
-  if (m.stochastic) {
+  if (m.solver == Solver::sgd) {
     SgdSettings base = settings_or_default(settings, m);
     if (m.cost) base.cost = *m.cost;
     const SgdSettings s = with_overrides(base, overrides);
@@ -329,7 +280,7 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
   }
   BatchSettings base = batch_settings_or_default(settings, m);
   base.cost = *m.cost;
-  const BatchSettings b = with_batch_overrides(base, overrides, m.name);
+  const BatchSettings b = with_batch_overrides(base, overrides, std::string(m.name));
   const Eigen::Matrix4d T_init =
       init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
   const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
@@ -381,7 +332,7 @@ ReadPoints read_points_with_info(const std::filesystem::path& path, const py::ha
 
 // ---- docstrings
 
-constexpr const char* kRegisterDoc =
+constexpr const char* kRegisterDocTemplate =
     R"doc(Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
 Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
@@ -409,24 +360,14 @@ method : str, default 'sgd'
     plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
     error). An unknown name raises InvalidSettingsError.
 **overrides
-    Flat keyword settings applied on top of `settings`, named like the CLI's options. For the
-    batch methods: max_distance (0.05) and kernel_scale (0.01) with max_distance_unit,
-    max_iterations (100), kernel ('none'), trim (1), neighbors (20), damping (1e-6: the initial
-    Levenberg-Marquardt damping), translation_tolerance (1e-5, scaled units), rotation_tolerance
-    (1e-5, rad), evaluation_points (2000), check_degeneracy (True), record_trace (False); any
-    other raises TypeError.
+    Flat keyword settings applied on top of `settings`, named like the CLI's options (the
+    library's settings table), each with its default and valid range. A distance given as a number
+    is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
+    optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
+    For the batch methods (any other keyword raises TypeError):
+@BATCH@.
     For the SGD methods:
-    batch_size (160), optimizer ('adam'; also sets learning_rate to that rule's usual value:
-    sgd 2, momentum 2 * (1 - momentum), adam/rmsprop 0.01, gauss-newton 1), learning_rate (0.01,
-    scaled units), max_distance (0.5), min_distance (1e-4) and kernel_scale (0.01) with
-    max_distance_unit ('scaled' or 'm'; a Distance keeps its own unit), max_iterations (4000),
-    seed (2019), momentum (0.9), beta1 (0.9), beta2 (0.999), rms_decay (0.9), epsilon (1e-8),
-    hessian_decay (0.9), damping (1e-3), window (20), chi2 (12.59), path_efficiency (0.5),
-    translation_tolerance (1e-6, scaled units), rotation_tolerance (1e-6, rad),
-    refine_stages (3), step_decay (0.5), distance_factor (3), average (True),
-    scaling_origin ('center'), cost ('point-to-point'; or 'point-to-plane', 'plane-to-plane'),
-    kernel ('none'; or 'huber', 'cauchy', 'geman-mcclure', 'welsch'), trim (1), neighbors (20),
-    check_degeneracy (True), evaluation_points (2000), record_trace (False).
+@SGD@.
     See docs/python.md for the settings each one sets.
 
 The GIL is released during the registration (and the KD-tree build), so registrations in
@@ -444,16 +385,18 @@ TypeError
     An unknown keyword, a keyword of the other solver, or a value of the wrong type.
 )doc";
 
-}  // namespace
+// kRegisterDocTemplate with the keyword lists of both solvers filled in.
+std::string register_doc(const py::module_& m) {
+  std::string doc = kRegisterDocTemplate;
+  const auto fill = [&](const std::string& marker, const std::string& text) {
+    doc.replace(doc.find(marker), marker.size(), text);
+  };
+  fill("@BATCH@", keyword_summary(m, Solver::batch, "    "));
+  fill("@SGD@", keyword_summary(m, Solver::sgd, "    "));
+  return doc;
+}
 
-void define_module(py::module_& m) {
-  m.doc() = "SGD-ICP point-cloud registration (C++ core of the sgd_icp package).";
-  m.attr("__version__") = SGDICP_VERSION;
-
-  bind_exceptions(m);
-  bind_settings(m);
-  bind_preprocessing(m);
-
+void bind_reference_index(py::module_& m) {
   py::class_<SharedIndex, std::shared_ptr<SharedIndex>>(
       m, "ReferenceIndex",
       "A KD-tree over a reference cloud, built once and reused by any number of registrations, "
@@ -516,7 +459,9 @@ void define_module(py::module_& m) {
         return "<sgd_icp.ReferenceIndex of " + std::to_string(s.index.size()) + " points (" +
                std::to_string(s.non_finite_dropped) + " non-finite rows dropped)>";
       });
+}
 
+void bind_results(py::module_& m) {
   py::class_<Trace>(m, "Trace",
                     "Per-iteration record of a registration (Settings.record_trace), one array "
                     "element per iteration.")
@@ -535,41 +480,15 @@ void define_module(py::module_& m) {
         return "<sgd_icp.Trace of " + std::to_string(t.iteration.size()) + " iterations>";
       });
 
-  py::class_<Result>(m, "RegistrationResult",
-                     "What register() returns: the transform, why it stopped, the work done and "
-                     "the final inlier statistics (every field of the C++ RegistrationResult, "
-                     "plus the point counts and the KD-tree build time).")
+  py::class_<Result> result(
+      m, "RegistrationResult",
+      "What register() returns: the transform, why it stopped, the work done and "
+      "the final inlier statistics (every field of the C++ RegistrationResult, "
+      "plus the point counts and the KD-tree build time).");
+  result
       .def_readonly("T_reference_source", &Result::T_reference_source,
                     "(4, 4) float64, metres: maps source points into the reference frame, p_ref "
                     "= R @ p_src + t.")
-      .def_readonly("converged", &Result::converged,
-                    "True if the convergence test passed after all refinement stages.")
-      .def_readonly("stop_reason", &Result::stop_reason,
-                    "'converged', 'max_iterations', 'no_correspondences' or 'diverged'.")
-      .def_readonly("message", &Result::message, "One line on why it stopped.")
-      .def_readonly("iterations", &Result::iterations, "Mini-batches processed.")
-      .def_readonly("points_processed", &Result::points_processed,
-                    "Source points drawn (iterations x batch size).")
-      .def_readonly("stages", &Result::stages, "Stationary stages completed.")
-      .def_readonly("evaluated_points", &Result::evaluated_points,
-                    "Source points (strided sample) in the final inlier statistics.")
-      .def_readonly("inliers", &Result::inliers,
-                    "Of those, with a reference point within the final d_max.")
-      .def_readonly("inlier_ratio", &Result::inlier_ratio, "inliers / evaluated_points.")
-      .def_readonly("inlier_rmse_m", &Result::inlier_rmse_m,
-                    "RMS distance of the inliers to their nearest reference point, metres.")
-      .def_readonly("final_max_distance_m", &Result::final_max_distance_m,
-                    "d_max at the end (after refinement), metres.")
-      .def_readonly("scale_m", &Result::scale_m, "Metres per scaled unit.")
-      .def_readonly("time_ms", &Result::time_ms,
-                    "Wall time of the registration, milliseconds (KD-tree build excluded).")
-      .def_readonly("constraint_ratio", &Result::constraint_ratio,
-                    "Smallest over largest eigenvalue of the point-to-plane information matrix of "
-                    "the final inlier pairs (scaled space); near 0, some motion is not "
-                    "constrained by the data (with check_degeneracy).")
-      .def_readonly("degenerate", &Result::degenerate,
-                    "constraint_ratio below the threshold: the transform is not trustworthy "
-                    "along some motion (see message).")
       .def_readonly("build_ms", &Result::build_ms,
                     "Wall time of the KD-tree build (and reference normals/covariances) for an "
                     "array reference, milliseconds (0 for a ReferenceIndex).")
@@ -584,12 +503,31 @@ void define_module(py::module_& m) {
       .def("__repr__", [](const Result& r) {
         return std::string(py::str("<sgd_icp.RegistrationResult {}: {} iterations, {} points "
                                    "processed, inlier RMSE {:.4g} m ({:.1%} inliers), {:.1f} ms>")
-                               .format(r.stop_reason, r.iterations, r.points_processed,
-                                       r.inlier_rmse_m, r.inlier_ratio, r.time_ms));
+                               .format(to_string(r.fields.stop_reason), r.fields.iterations,
+                                       r.fields.points_processed, r.fields.inlier_rmse_m,
+                                       r.fields.inlier_ratio, r.fields.time_ms));
       });
+  // The fields of the C++ result, from its one list (result.hpp).
+  for_each_result_field([&](const char* name, auto member, const char* doc) {
+    result.def_property_readonly(
+        name,
+        [member](const Result& r) {
+          if constexpr (std::is_same_v<std::remove_cvref_t<decltype(r.fields.*member)>,
+                                       StopReason>) {
+            return std::string(to_string(r.fields.*member));
+          } else {
+            return r.fields.*member;
+          }
+        },
+        doc);
+  });
+}
 
-  m.def("register", &register_clouds, kRegisterDoc, "source"_a, "reference"_a,
-        "init"_a = py::none(), "settings"_a = py::none(), "method"_a = "sgd");
+void bind_register_and_io(py::module_& m) {
+  // The keyword lists come from the settings table; the docstring must outlive the module.
+  static const std::string doc = register_doc(m);
+  m.def("register", &register_clouds, doc.c_str(), "source"_a, "reference"_a, "init"_a = py::none(),
+        "settings"_a = py::none(), "method"_a = "sgd");
 
   py::class_<ReadPoints>(m, "ReadResult", "A point cloud read from a file, with its counts.")
       .def_readonly("points", &ReadPoints::points,
@@ -636,7 +574,9 @@ void define_module(py::module_& m) {
       "from the extension unless format ('ply', 'pcd', 'xyz') is given. encoding: 'binary' "
       "(default) or 'ascii' (XYZ is always text). Reading the file back gives the same float32 "
       "values. Raises IoError (OSError) or FormatError (ValueError).");
+}
 
+void bind_metrics(py::module_& m) {
   m.def(
       "translation_error",
       [](const py::handle& T_est, const py::handle& T_gt) {
@@ -662,6 +602,21 @@ void define_module(py::module_& m) {
       "T_est"_a, "T_gt"_a,
       "The paper's rotation error: |d roll| + |d pitch| + |d yaw| of two (4, 4) transforms, "
       "each wrapped to (-pi, pi], radians.");
+}
+
+}  // namespace
+
+void define_module(py::module_& m) {
+  m.doc() = "SGD-ICP point-cloud registration (C++ core of the sgd_icp package).";
+  m.attr("__version__") = SGDICP_VERSION;
+
+  bind_exceptions(m);
+  bind_settings(m);
+  bind_preprocessing(m);
+  bind_reference_index(m);
+  bind_results(m);
+  bind_register_and_io(m);
+  bind_metrics(m);
 }
 
 }  // namespace sgdicp::python

@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 #include <utility>
+#include <vector>
 
 #include <pybind11/native_enum.h>
 
@@ -19,7 +20,7 @@ namespace {
 
 using namespace pybind11::literals;
 
-// ---- enums from Python values (the enum itself or its name)
+// ---- enums from Python values (the enum itself or one of its names, enum_names.hpp)
 
 // The enum value if `value` is an instance of the bound enum E.
 template <typename E>
@@ -29,53 +30,39 @@ std::optional<E> as_enum(const py::handle& value) {
   return py::detail::cast_op<E>(caster);
 }
 
-OptimizerType optimizer_from_object(const py::handle& value, std::string_view name) {
-  if (const auto e = as_enum<OptimizerType>(value)) return *e;
-  if (py::isinstance<py::str>(value)) {
-    std::string text = value.cast<std::string>();
-    std::replace(text.begin(), text.end(), '_', '-');  // "gauss_newton" as well as "gauss-newton"
-    return optimizer_from_string(text);
-  }
-  throw py::type_error(std::string(name) + " must be an OptimizerType or one of 'sgd', " +
-                       "'momentum', 'rmsprop', 'adam', 'gauss-newton', got " + type_name(value));
+// The Python class of each bound enum, for messages.
+constexpr std::string_view python_class(OptimizerType) {
+  return "OptimizerType";
+}
+constexpr std::string_view python_class(ScalingOrigin) {
+  return "ScalingOrigin";
+}
+constexpr std::string_view python_class(CostType) {
+  return "CostType";
+}
+constexpr std::string_view python_class(KernelType) {
+  return "KernelType";
+}
+constexpr std::string_view python_class(Distance::Unit) {
+  return "DistanceUnit";
 }
 
-ScalingOrigin scaling_origin_from_object(const py::handle& value, std::string_view name) {
-  if (const auto e = as_enum<ScalingOrigin>(value)) return *e;
-  if (py::isinstance<py::str>(value)) {
-    const std::string text = value.cast<std::string>();
-    if (text == "center") return ScalingOrigin::center;
-    if (text == "lower_corner" || text == "corner") return ScalingOrigin::lower_corner;
-    throw InvalidSettingsError(std::string(name) + ": unknown scaling origin '" + text +
-                               "' (expected 'center' or 'lower_corner')");
+// "'a', 'b', 'c'": the names of E for a message.
+template <typename E>
+std::string quoted_names() {
+  std::string out;
+  for (const auto name : canonical_names<E>()) {
+    out += (out.empty() ? "'" : ", '") + std::string(name) + "'";
   }
-  throw py::type_error(std::string(name) +
-                       " must be a ScalingOrigin, 'center' or 'lower_corner', got " +
-                       type_name(value));
+  return out;
 }
 
-KernelType kernel_from_object(const py::handle& value, std::string_view name) {
-  if (const auto e = as_enum<KernelType>(value)) return *e;
-  if (py::isinstance<py::str>(value)) {
-    std::string text = value.cast<std::string>();
-    std::replace(text.begin(), text.end(), '_', '-');
-    return kernel_from_string(text);
-  }
-  throw py::type_error(std::string(name) + " must be a KernelType or one of 'none', 'huber', " +
-                       "'cauchy', 'geman-mcclure', 'welsch', got " + type_name(value));
-}
-
-Distance::Unit unit_from_object(const py::handle& value, std::string_view name) {
-  if (const auto e = as_enum<Distance::Unit>(value)) return *e;
-  if (py::isinstance<py::str>(value)) {
-    const std::string text = value.cast<std::string>();
-    if (text == "scaled") return Distance::Unit::scaled;
-    if (text == "m" || text == "metres" || text == "meters") return Distance::Unit::metres;
-    throw InvalidSettingsError(std::string(name) + ": unknown unit '" + text +
-                               "' (expected 'm' or 'scaled')");
-  }
-  throw py::type_error(std::string(name) + " must be a DistanceUnit, 'm' or 'scaled', got " +
-                       type_name(value));
+template <typename E>
+E enum_from_object(const py::handle& value, std::string_view name) {
+  if (const auto e = as_enum<E>(value)) return *e;
+  if (py::isinstance<py::str>(value)) return parse_enum<E>(value.cast<std::string>());
+  throw py::type_error(std::string(name) + " must be a " + std::string(python_class(E{})) +
+                       " or one of " + quoted_names<E>() + ", got " + type_name(value));
 }
 
 Distance distance_from_object(const py::handle& value, std::string_view name) {
@@ -86,31 +73,8 @@ Distance distance_from_object(const py::handle& value, std::string_view name) {
                        type_name(value));
 }
 
-// The step size each rule is usually run with; `optimizer=` in the overrides sets it unless
-// `learning_rate=` is given too. The same table as the CLI's --optimizer (apps/cli_settings.hpp).
-double usual_learning_rate(OptimizerType type, double momentum) {
-  switch (type) {
-    case OptimizerType::sgd:
-      return 2.0;
-    case OptimizerType::momentum:
-      return 2.0 * (1.0 - momentum);
-    case OptimizerType::gauss_newton:
-      return 1.0;
-    case OptimizerType::adam:
-    case OptimizerType::rmsprop:
-      break;
-  }
-  return SgdSettings{}.optimizer.learning_rate;
-}
-
-// ---- the flat keyword overrides: the CLI's option names with '_' for '-'
-
-using Apply = void (*)(SgdSettings&, const py::handle&, Distance::Unit);
-
-struct Keyword {
-  std::string_view name;
-  Apply apply;
-};
+// ---- the flat keyword overrides: the names of the settings table (settings.hpp) with '_' for
+// '-', i.e. the CLI's options
 
 // A distance given as a number takes the unit of max_distance_unit; a Distance keeps its own.
 Distance distance_or_number(const py::handle& value, Distance::Unit unit, std::string_view name) {
@@ -118,101 +82,38 @@ Distance distance_or_number(const py::handle& value, Distance::Unit unit, std::s
   return Distance{as_real(value, name), unit};
 }
 
-// "optimizer" and "max_distance_unit" are handled before these (they affect others).
-constexpr std::array kKeywords{
-    Keyword{"batch_size", [](SgdSettings& s, const py::handle& v,
-                             Distance::Unit) { s.batch_size = as_count(v, "batch_size"); }},
-    Keyword{"max_distance",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit u) {
-              s.max_correspondence_distance = distance_or_number(v, u, "max_distance");
-            }},
-    Keyword{"max_iterations",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.max_iterations = as_count(v, "max_iterations");
-            }},
-    Keyword{"seed", [](SgdSettings& s, const py::handle& v,
-                       Distance::Unit) { s.seed = as_count(v, "seed"); }},
-    Keyword{"learning_rate",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.optimizer.learning_rate = as_real(v, "learning_rate");
-            }},
-    Keyword{"momentum", [](SgdSettings& s, const py::handle& v,
-                           Distance::Unit) { s.optimizer.momentum = as_real(v, "momentum"); }},
-    Keyword{"beta1", [](SgdSettings& s, const py::handle& v,
-                        Distance::Unit) { s.optimizer.beta1 = as_real(v, "beta1"); }},
-    Keyword{"beta2", [](SgdSettings& s, const py::handle& v,
-                        Distance::Unit) { s.optimizer.beta2 = as_real(v, "beta2"); }},
-    Keyword{"rms_decay", [](SgdSettings& s, const py::handle& v,
-                            Distance::Unit) { s.optimizer.rms_decay = as_real(v, "rms_decay"); }},
-    Keyword{"epsilon", [](SgdSettings& s, const py::handle& v,
-                          Distance::Unit) { s.optimizer.epsilon = as_real(v, "epsilon"); }},
-    Keyword{"hessian_decay",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.optimizer.hessian_decay = as_real(v, "hessian_decay");
-            }},
-    Keyword{"damping", [](SgdSettings& s, const py::handle& v,
-                          Distance::Unit) { s.optimizer.damping = as_real(v, "damping"); }},
-    Keyword{"window", [](SgdSettings& s, const py::handle& v,
-                         Distance::Unit) { s.convergence.window = as_count(v, "window"); }},
-    Keyword{"chi2", [](SgdSettings& s, const py::handle& v,
-                       Distance::Unit) { s.convergence.chi2 = as_real(v, "chi2"); }},
-    Keyword{"path_efficiency",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.convergence.max_path_efficiency = as_real(v, "path_efficiency");
-            }},
-    Keyword{"translation_tolerance",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.convergence.translation_tolerance = as_real(v, "translation_tolerance");
-            }},
-    Keyword{"rotation_tolerance",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.convergence.rotation_tolerance = as_real(v, "rotation_tolerance");
-            }},
-    Keyword{"refine_stages",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.refinement.stages = as_count(v, "refine_stages");
-            }},
-    Keyword{"step_decay",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.refinement.step_decay = as_real(v, "step_decay");
-            }},
-    Keyword{"distance_factor",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.refinement.distance_factor = as_real(v, "distance_factor");
-            }},
-    Keyword{"min_distance",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit u) {
-              s.refinement.min_distance = distance_or_number(v, u, "min_distance");
-            }},
-    Keyword{"cost", [](SgdSettings& s, const py::handle& v,
-                       Distance::Unit) { s.cost = cost_from_object(v, "cost"); }},
-    Keyword{"kernel", [](SgdSettings& s, const py::handle& v,
-                         Distance::Unit) { s.kernel = kernel_from_object(v, "kernel"); }},
-    Keyword{"kernel_scale",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit u) {
-              s.kernel_scale = distance_or_number(v, u, "kernel_scale");
-            }},
-    Keyword{"trim", [](SgdSettings& s, const py::handle& v,
-                       Distance::Unit) { s.trim_ratio = as_real(v, "trim"); }},
-    Keyword{"neighbors", [](SgdSettings& s, const py::handle& v,
-                            Distance::Unit) { s.neighborhood.k = as_count(v, "neighbors"); }},
-    Keyword{"check_degeneracy",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.check_degeneracy = as_bool(v, "check_degeneracy");
-            }},
-    Keyword{"average", [](SgdSettings& s, const py::handle& v,
-                          Distance::Unit) { s.average_iterates = as_bool(v, "average"); }},
-    Keyword{"scaling_origin",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.scaling_origin = scaling_origin_from_object(v, "scaling_origin");
-            }},
-    Keyword{"evaluation_points",
-            [](SgdSettings& s, const py::handle& v, Distance::Unit) {
-              s.evaluation_points = as_count(v, "evaluation_points");
-            }},
-    Keyword{"record_trace", [](SgdSettings& s, const py::handle& v,
-                               Distance::Unit) { s.record_trace = as_bool(v, "record_trace"); }},
-};
+// A keyword's Python value as the value of its setting.
+template <typename S>
+SettingValue value_from_object(const Setting<S>& s, const py::handle& value, Distance::Unit unit,
+                               std::string_view keyword) {
+  switch (s.kind) {
+    case SettingKind::count:
+      return as_count(value, keyword);
+    case SettingKind::real:
+      return as_real(value, keyword);
+    case SettingKind::flag:
+      return as_bool(value, keyword);
+    case SettingKind::distance:
+      return distance_or_number(value, unit, keyword);
+    case SettingKind::choice:
+      break;
+  }
+  // Any of the enum's members (by its name) or one of its names.
+  static const py::object enum_type = py::module_::import("enum").attr("Enum");
+  if (py::isinstance(value, enum_type)) return value.attr("name").cast<std::string>();
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  std::string names;
+  for (const auto name : s.choices())
+    names += (names.empty() ? "'" : ", '") + std::string(name) + "'";
+  throw py::type_error(std::string(keyword) + " must be one of " + names +
+                       " (or the enum member), got " + type_name(value));
+}
+
+std::string keyword_of(std::string_view name) {
+  std::string keyword(name);
+  std::replace(keyword.begin(), keyword.end(), '-', '_');
+  return keyword;
+}
 
 // Names a reader of the Settings attributes may try, and the keyword that means it.
 constexpr std::array<std::pair<std::string_view, std::string_view>, 13> kSuggestions{{
@@ -231,9 +132,10 @@ constexpr std::array<std::pair<std::string_view, std::string_view>, 13> kSuggest
     {"method", "cost"},
 }};
 
-std::string keyword_list() {
-  std::string list = "optimizer, max_distance_unit";
-  for (const auto& k : kKeywords) list += ", " + std::string(k.name);
+template <typename S>
+std::string keyword_list(const std::vector<Setting<S>>& table) {
+  std::string list = "max_distance_unit";
+  for (const auto& s : table) list += ", " + keyword_of(s.name);
   return list;
 }
 
@@ -242,68 +144,54 @@ std::string keyword_list() {
   for (const auto& [alias, keyword] : kSuggestions) {
     if (name == alias) message += " (did you mean '" + std::string(keyword) + "'?)";
   }
-  throw py::type_error(message + "; the keyword settings are: " + keyword_list());
+  throw py::type_error(message +
+                       "; the keyword settings are: " + keyword_list(sgd_settings_table()));
 }
 
-// ---- the keyword overrides of the batch methods (BatchSettings): the CLI's options that apply
-// to them (apps/cli_settings.hpp, make_method), plus `cost` for BatchSettings(...) itself
+[[noreturn]] void not_a_batch_keyword(const std::string& name, std::string_view method) {
+  const bool sgd_only = find_sgd_setting(name) != nullptr && name.find('-') == std::string::npos;
+  std::string message = sgd_only ? "setting '" + name + "' applies to the SGD methods only, not to "
+                                 : "unknown setting '" + name + "' for ";
+  message += method.empty() ? std::string("BatchSettings")
+                            : "the batch method '" + std::string(method) + "'";
+  throw py::type_error(message +
+                       "; the batch keyword settings are: " + keyword_list(batch_settings_table()));
+}
 
-using BatchApply = void (*)(BatchSettings&, const py::handle&, Distance::Unit);
-
-struct BatchKeyword {
-  std::string_view name;
-  BatchApply apply;
-};
-
-constexpr std::array kBatchKeywords{
-    BatchKeyword{"max_distance",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit u) {
-                   s.max_correspondence_distance = distance_or_number(v, u, "max_distance");
-                 }},
-    BatchKeyword{"max_iterations",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.max_iterations = as_count(v, "max_iterations");
-                 }},
-    BatchKeyword{"kernel", [](BatchSettings& s, const py::handle& v,
-                              Distance::Unit) { s.kernel = kernel_from_object(v, "kernel"); }},
-    BatchKeyword{"kernel_scale",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit u) {
-                   s.kernel_scale = distance_or_number(v, u, "kernel_scale");
-                 }},
-    BatchKeyword{"trim", [](BatchSettings& s, const py::handle& v,
-                            Distance::Unit) { s.trim_ratio = as_real(v, "trim"); }},
-    BatchKeyword{"neighbors", [](BatchSettings& s, const py::handle& v,
-                                 Distance::Unit) { s.neighborhood.k = as_count(v, "neighbors"); }},
-    BatchKeyword{"damping", [](BatchSettings& s, const py::handle& v,
-                               Distance::Unit) { s.initial_damping = as_real(v, "damping"); }},
-    BatchKeyword{"translation_tolerance",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.translation_tolerance = as_real(v, "translation_tolerance");
-                 }},
-    BatchKeyword{"rotation_tolerance",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.rotation_tolerance = as_real(v, "rotation_tolerance");
-                 }},
-    BatchKeyword{"evaluation_points",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.evaluation_points = as_count(v, "evaluation_points");
-                 }},
-    BatchKeyword{"check_degeneracy",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.check_degeneracy = as_bool(v, "check_degeneracy");
-                 }},
-    BatchKeyword{"record_trace",
-                 [](BatchSettings& s, const py::handle& v, Distance::Unit) {
-                   s.record_trace = as_bool(v, "record_trace");
-                 }},
-    BatchKeyword{"cost", [](BatchSettings& s, const py::handle& v,
-                            Distance::Unit) { s.cost = cost_from_object(v, "cost"); }},
-};
-
-std::string batch_keyword_list() {
-  std::string list = "max_distance_unit";
-  for (const auto& k : kBatchKeywords) list += ", " + std::string(k.name);
-  return list;
+// Applies the keywords of `overrides` that name a setting of `table`, in table order (so that
+// optimizer= sets the learning rate before learning_rate= overrides it), with the unit of
+// max_distance_unit for distances given as numbers, then validates.
+template <typename S>
+S apply_keywords(S s, const py::dict& overrides, const std::vector<Setting<S>>& table) {
+  Distance::Unit unit = Distance::Unit::scaled;
+  const bool unit_given = overrides.contains("max_distance_unit");
+  if (unit_given)
+    unit = enum_from_object<Distance::Unit>(overrides["max_distance_unit"], "max_distance_unit");
+  bool numeric_distance = false;
+  for (const auto& setting : table) {
+    const std::string keyword = keyword_of(setting.name);
+    if (!overrides.contains(keyword)) continue;
+    const py::handle value = overrides[keyword.c_str()];
+    const SettingValue v = value_from_object(setting, value, unit, keyword);
+    numeric_distance = numeric_distance ||
+                       (setting.kind == SettingKind::distance && !py::isinstance<Distance>(value));
+    check_range(setting, v, SettingNames::python);
+    setting.set(s, v);
+  }
+  if (unit_given && !numeric_distance) {
+    std::vector<std::string> distances;
+    for (const auto& setting : table) {
+      if (setting.kind == SettingKind::distance) distances.push_back(keyword_of(setting.name));
+    }
+    std::string names;
+    for (std::size_t i = 0; i < distances.size(); ++i) {
+      names += (i == 0 ? "" : i + 1 == distances.size() ? " and " : ", ") + distances[i];
+    }
+    throw InvalidSettingsError("max_distance_unit applies to " + names +
+                               " given as numbers, and none is");
+  }
+  s.validate(SettingNames::python);
+  return s;
 }
 
 // ---- repr and equality
@@ -376,40 +264,6 @@ std::string repr(const SgdSettings& s) {
               s.check_degeneracy);
 }
 
-bool same(const Distance& a, const Distance& b) {
-  return a.value == b.value && a.unit == b.unit;
-}
-bool same(const OptimizerSettings& a, const OptimizerSettings& b) {
-  return a.type == b.type && a.learning_rate == b.learning_rate && a.momentum == b.momentum &&
-         a.beta1 == b.beta1 && a.beta2 == b.beta2 && a.rms_decay == b.rms_decay &&
-         a.epsilon == b.epsilon && a.hessian_decay == b.hessian_decay && a.damping == b.damping;
-}
-bool same(const ConvergenceSettings& a, const ConvergenceSettings& b) {
-  return a.window == b.window && a.chi2 == b.chi2 &&
-         a.max_path_efficiency == b.max_path_efficiency &&
-         a.translation_tolerance == b.translation_tolerance &&
-         a.rotation_tolerance == b.rotation_tolerance;
-}
-bool same(const RefinementSettings& a, const RefinementSettings& b) {
-  return a.stages == b.stages && a.step_decay == b.step_decay &&
-         a.distance_factor == b.distance_factor && same(a.min_distance, b.min_distance);
-}
-bool same(const NeighborhoodSettings& a, const NeighborhoodSettings& b) {
-  return a.k == b.k && a.num_threads == b.num_threads && a.regularize == b.regularize &&
-         a.epsilon == b.epsilon && a.viewpoint == b.viewpoint;
-}
-bool same(const SgdSettings& a, const SgdSettings& b) {
-  return a.batch_size == b.batch_size &&
-         same(a.max_correspondence_distance, b.max_correspondence_distance) &&
-         same(a.optimizer, b.optimizer) && same(a.convergence, b.convergence) &&
-         same(a.refinement, b.refinement) && a.cost == b.cost && a.kernel == b.kernel &&
-         same(a.kernel_scale, b.kernel_scale) && a.trim_ratio == b.trim_ratio &&
-         same(a.neighborhood, b.neighborhood) && a.scaling_origin == b.scaling_origin &&
-         a.max_iterations == b.max_iterations && a.seed == b.seed &&
-         a.average_iterates == b.average_iterates && a.evaluation_points == b.evaluation_points &&
-         a.record_trace == b.record_trace && a.check_degeneracy == b.check_degeneracy;
-}
-
 std::string repr(const BatchSettings& s) {
   return py::str(
              "BatchSettings(cost=CostType.{}, max_correspondence_distance={}, "
@@ -422,23 +276,13 @@ std::string repr(const BatchSettings& s) {
               s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
               s.check_degeneracy, s.record_trace);
 }
-bool same(const BatchSettings& a, const BatchSettings& b) {
-  return a.cost == b.cost && same(a.max_correspondence_distance, b.max_correspondence_distance) &&
-         a.kernel == b.kernel && same(a.kernel_scale, b.kernel_scale) &&
-         a.trim_ratio == b.trim_ratio && a.max_iterations == b.max_iterations &&
-         a.translation_tolerance == b.translation_tolerance &&
-         a.rotation_tolerance == b.rotation_tolerance && a.initial_damping == b.initial_damping &&
-         same(a.neighborhood, b.neighborhood) && a.evaluation_points == b.evaluation_points &&
-         a.check_degeneracy == b.check_degeneracy && a.record_trace == b.record_trace;
-}
-
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
 template <typename T>
 void def_value_methods(py::class_<T>& c) {
   c.def("__eq__",
         [](const T& a, const py::handle& b) -> py::object {
           if (!py::isinstance<T>(b)) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
-          return py::bool_(same(a, b.cast<const T&>()));
+          return py::bool_(a == b.cast<const T&>());
         })
       .def("__repr__", [](const T& a) { return repr(a); })
       .def("__copy__", [](const T& a) { return T(a); })
@@ -491,7 +335,11 @@ std::uint64_t as_count(const py::handle& value, std::string_view name) {
                                std::string(py::str(index)));
   }
   const unsigned long long v = PyLong_AsUnsignedLongLong(index.ptr());
-  if (PyErr_Occurred()) throw py::error_already_set();
+  if (PyErr_Occurred()) {
+    PyErr_Clear();  // beyond 64 bits: never wrapped around
+    throw InvalidSettingsError(std::string(name) + " must be at most 2^64-1, got " +
+                               std::string(py::str(index)));
+  }
   return v;
 }
 
@@ -512,90 +360,35 @@ bool as_bool(const py::handle& value, std::string_view name) {
 }
 
 CostType cost_from_object(const py::handle& value, std::string_view name) {
-  if (const auto e = as_enum<CostType>(value)) return *e;
-  if (py::isinstance<py::str>(value)) {
-    std::string text = value.cast<std::string>();
-    std::replace(text.begin(), text.end(), '_', '-');
-    for (const auto t :
-         {CostType::point_to_point, CostType::point_to_plane, CostType::plane_to_plane}) {
-      if (text == to_string(t)) return t;
-    }
-    throw InvalidSettingsError(std::string(name) + ": unknown cost '" + text +
-                               "' (expected point-to-point, point-to-plane or plane-to-plane)");
-  }
-  throw py::type_error(std::string(name) + " must be a CostType or one of 'point-to-point', " +
-                       "'point-to-plane', 'plane-to-plane', got " + type_name(value));
+  return enum_from_object<CostType>(value, name);
 }
 
 SgdSettings with_overrides(SgdSettings s, const py::dict& overrides) {
-  bool numeric_distance = false;
-  Distance::Unit unit = Distance::Unit::scaled;
-  if (overrides.contains("max_distance_unit")) {
-    unit = unit_from_object(overrides["max_distance_unit"], "max_distance_unit");
-  }
-  if (overrides.contains("optimizer")) {
-    s.optimizer.type = optimizer_from_object(overrides["optimizer"], "optimizer");
-    s.optimizer.learning_rate = usual_learning_rate(s.optimizer.type, s.optimizer.momentum);
-  }
   for (const auto& [key, value] : overrides) {
     const std::string name = py::str(key);
-    if (name == "optimizer" || name == "max_distance_unit") continue;
-    const auto* keyword = std::find_if(kKeywords.begin(), kKeywords.end(),
-                                       [&](const Keyword& k) { return k.name == name; });
-    if (keyword == kKeywords.end()) unknown_keyword(name);
-    if ((name == "max_distance" || name == "min_distance" || name == "kernel_scale") &&
-        !py::isinstance<Distance>(value)) {
-      numeric_distance = true;
+    if (name != "max_distance_unit" &&
+        (name.find('-') != std::string::npos || !find_sgd_setting(name))) {
+      unknown_keyword(name);
     }
-    keyword->apply(s, value, unit);
   }
-  if (overrides.contains("max_distance_unit") && !numeric_distance) {
-    throw InvalidSettingsError(
-        "max_distance_unit applies to max_distance, min_distance and kernel_scale given as "
-        "numbers, and none is");
-  }
-  s.validate();
-  return s;
+  return apply_keywords(std::move(s), overrides, sgd_settings_table());
 }
 
 BatchSettings with_batch_overrides(BatchSettings s, const py::dict& overrides,
                                    std::string_view method) {
-  bool numeric_distance = false;
-  Distance::Unit unit = Distance::Unit::scaled;
-  if (overrides.contains("max_distance_unit")) {
-    unit = unit_from_object(overrides["max_distance_unit"], "max_distance_unit");
-  }
   for (const auto& [key, value] : overrides) {
     const std::string name = py::str(key);
-    if (name == "max_distance_unit") continue;
-    const auto* keyword = std::find_if(kBatchKeywords.begin(), kBatchKeywords.end(),
-                                       [&](const BatchKeyword& k) { return k.name == name; });
-    if (keyword == kBatchKeywords.end()) {
-      const bool sgd_only = std::any_of(kKeywords.begin(), kKeywords.end(),
-                                        [&](const Keyword& k) { return k.name == name; }) ||
-                            name == "optimizer";
-      std::string message = sgd_only
-                                ? "setting '" + name + "' applies to the SGD methods only, not to "
-                                : "unknown setting '" + name + "' for ";
-      message += method.empty() ? std::string("BatchSettings")
-                                : "the batch method '" + std::string(method) + "'";
-      throw py::type_error(message + "; the batch keyword settings are: " + batch_keyword_list());
+    if (name != "max_distance_unit" &&
+        (name.find('-') != std::string::npos || !find_batch_setting(name))) {
+      not_a_batch_keyword(name, method);
     }
-    if ((name == "max_distance" || name == "kernel_scale") && !py::isinstance<Distance>(value)) {
-      numeric_distance = true;
-    }
-    keyword->apply(s, value, unit);
   }
-  if (overrides.contains("max_distance_unit") && !numeric_distance) {
-    throw InvalidSettingsError(
-        "max_distance_unit applies to max_distance and kernel_scale given as numbers, and none "
-        "is");
-  }
-  s.validate();
-  return s;
+  return apply_keywords(std::move(s), overrides, batch_settings_table());
 }
 
-void bind_settings(py::module_& m) {
+namespace {
+
+void bind_enums(py::module_& m) {
   // Native Python enums (enum.Enum): the stubs can say so, and they pickle and compare as usual.
   py::native_enum<Distance::Unit>(m, "DistanceUnit", "enum.Enum", "Unit of a Distance.")
       .value("metres", Distance::Unit::metres, "metres")
@@ -640,7 +433,9 @@ void bind_settings(py::module_& m) {
       .value("geman_mcclure", KernelType::geman_mcclure, "Geman-McClure")
       .value("welsch", KernelType::welsch, "Welsch")
       .finalize();
+}
 
+void bind_distance(py::module_& m) {
   py::class_<Distance> distance(
       m, "Distance",
       "A length with its unit: metres, or scaled units (1 = the largest side of the joint "
@@ -648,7 +443,8 @@ void bind_settings(py::module_& m) {
       "Make one with Distance.metres(v) or Distance.scaled(v).");
   distance
       .def(py::init([](const py::handle& value, const py::handle& unit) {
-             return Distance{as_real(value, "value"), unit_from_object(unit, "unit")};
+             return Distance{as_real(value, "value"),
+                             enum_from_object<Distance::Unit>(unit, "unit")};
            }),
            "value"_a, "unit"_a = "scaled",
            "A distance of `value` in `unit` ('m', 'scaled' or a DistanceUnit; default "
@@ -662,20 +458,24 @@ void bind_settings(py::module_& m) {
       .def_readwrite("value", &Distance::value, "The length, in `unit`.")
       .def_property(
           "unit", [](const Distance& d) { return d.unit; },
-          [](Distance& d, const py::handle& v) { d.unit = unit_from_object(v, "unit"); },
+          [](Distance& d, const py::handle& v) {
+            d.unit = enum_from_object<Distance::Unit>(v, "unit");
+          },
           "DistanceUnit.metres or DistanceUnit.scaled.")
       .def("to_scaled", &Distance::to_scaled, "metres_per_unit"_a,
            "The value in scaled units, given the metres per scaled unit "
            "(RegistrationResult.scale_m).");
   def_value_methods(distance);
+}
 
+void bind_optimizer(py::module_& m) {
   py::class_<OptimizerSettings> optimizer(
       m, "OptimizerSettings", "Step rule of eq. 3 and its parameters (Settings.optimizer).");
   optimizer.def(py::init<>(), "The C++ defaults: fixed step (sgd) with learning rate 2.")
       .def_property(
           "type", [](const OptimizerSettings& o) { return o.type; },
           [](OptimizerSettings& o, const py::handle& v) {
-            o.type = optimizer_from_object(v, "type");
+            o.type = enum_from_object<OptimizerType>(v, "type");
           },
           "Step rule: OptimizerType or its name ('sgd', 'momentum', 'rmsprop', 'adam', "
           "'gauss-newton').")
@@ -702,7 +502,9 @@ void bind_settings(py::module_& m) {
       .def("validate", &OptimizerSettings::validate,
            "Raises InvalidSettingsError (a ValueError) naming the first invalid value.");
   def_value_methods(optimizer);
+}
 
+void bind_convergence(py::module_& m) {
   py::class_<ConvergenceSettings> convergence(
       m, "ConvergenceSettings",
       "When a stage is stationary: Hotelling's T^2 test on the window's mini-batch gradients and "
@@ -741,7 +543,9 @@ void bind_settings(py::module_& m) {
   def_distance(refinement, "min_distance", &RefinementSettings::min_distance,
                "Floor of d_max, a Distance. Default Distance.scaled(1e-4).");
   def_value_methods(refinement);
+}
 
+void bind_neighborhood(py::module_& m) {
   py::class_<NeighborhoodSettings> neighborhood(
       m, "NeighborhoodSettings",
       "k-nearest neighbourhoods for the normals and covariances of the plane costs "
@@ -775,7 +579,9 @@ void bind_settings(py::module_& m) {
           },
           "Normals are flipped to face this point, (3,) array, metres. Default (0, 0, 0).");
   def_value_methods(neighborhood);
+}
 
+void bind_sgd_settings(py::module_& m) {
   py::class_<SgdSettings> settings(
       m, "Settings",
       "Every setting of a registration: the C++ sgdicp::SgdSettings, same names and defaults.\n\n"
@@ -790,8 +596,9 @@ void bind_settings(py::module_& m) {
       .def_static(
           "paper",
           [](const py::handle& optimizer, const py::kwargs& overrides) {
-            return with_overrides(SgdSettings::paper(optimizer_from_object(optimizer, "optimizer")),
-                                  overrides);
+            return with_overrides(
+                SgdSettings::paper(enum_from_object<OptimizerType>(optimizer, "optimizer")),
+                overrides);
           },
           "optimizer"_a = "sgd",
           "The paper's settings: m = 160, d_max = 0.5 scaled, fixed step alpha = 2 ('sgd') or "
@@ -803,8 +610,9 @@ void bind_settings(py::module_& m) {
             return with_overrides(s, overrides);
           },
           "A copy with the flat keyword overrides of register() applied.")
-      .def("validate", &SgdSettings::validate,
-           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.");
+      .def(
+          "validate", [](const SgdSettings& s) { s.validate(); },
+          "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.");
   def_count(settings, "batch_size", &SgdSettings::batch_size,
             "m of the paper: source points per mini-batch. Default 160.");
   def_distance(
@@ -823,13 +631,15 @@ void bind_settings(py::module_& m) {
           "CostType.point_to_point.")
       .def_property(
           "kernel", [](const SgdSettings& s) { return s.kernel; },
-          [](SgdSettings& s, const py::handle& v) { s.kernel = kernel_from_object(v, "kernel"); },
+          [](SgdSettings& s, const py::handle& v) {
+            s.kernel = enum_from_object<KernelType>(v, "kernel");
+          },
           "Robust kernel on each pair's residual: KernelType or its name ('none', 'huber', "
           "'cauchy', 'geman-mcclure', 'welsch'). Default KernelType.none.")
       .def_property(
           "scaling_origin", [](const SgdSettings& s) { return s.scaling_origin; },
           [](SgdSettings& s, const py::handle& v) {
-            s.scaling_origin = scaling_origin_from_object(v, "scaling_origin");
+            s.scaling_origin = enum_from_object<ScalingOrigin>(v, "scaling_origin");
           },
           "Origin of the scaled space and pivot of the rotation. Default ScalingOrigin.center.");
   def_distance(settings, "kernel_scale", &SgdSettings::kernel_scale,
@@ -857,7 +667,9 @@ void bind_settings(py::module_& m) {
            "Check the final alignment for degenerate geometry (a plane, a corridor) and report "
            "it in RegistrationResult.constraint_ratio / degenerate. Default True.");
   def_value_methods(settings);
+}
 
+void bind_batch_settings(py::module_& m) {
   py::class_<BatchSettings> batch(
       m, "BatchSettings",
       "Settings of the batch methods (register(method='icp' | 'icp-plane' | 'gicp')): the C++ "
@@ -899,8 +711,9 @@ void bind_settings(py::module_& m) {
             return with_batch_overrides(s, overrides, "");
           },
           "A copy with the batch keyword overrides applied.")
-      .def("validate", &BatchSettings::validate,
-           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.")
+      .def(
+          "validate", [](const BatchSettings& s) { s.validate(); },
+          "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.")
       .def_property(
           "cost", [](const BatchSettings& s) { return s.cost; },
           [](BatchSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); },
@@ -911,7 +724,9 @@ void bind_settings(py::module_& m) {
                "largest side of the joint bounding box). Default Distance.scaled(0.05).");
   batch.def_property(
       "kernel", [](const BatchSettings& s) { return s.kernel; },
-      [](BatchSettings& s, const py::handle& v) { s.kernel = kernel_from_object(v, "kernel"); },
+      [](BatchSettings& s, const py::handle& v) {
+        s.kernel = enum_from_object<KernelType>(v, "kernel");
+      },
       "Robust kernel on each pair's residual: KernelType or its name. Default KernelType.none.");
   def_distance(batch, "kernel_scale", &BatchSettings::kernel_scale,
                "Scale of the kernel: the residual size where it starts to down-weight, a "
@@ -943,6 +758,120 @@ void bind_settings(py::module_& m) {
            "Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, "
            "pairs, mean squared pair distance). Default False.");
   def_value_methods(batch);
+}
+
+// The Python class holding a setting's attribute, by the part of its C++ member before the dot.
+std::string class_of(std::string_view field, std::string_view top) {
+  const auto dot = field.find('.');
+  if (dot == std::string_view::npos) return std::string(top);
+  const std::string_view part = field.substr(0, dot);
+  if (part == "optimizer") return "OptimizerSettings";
+  if (part == "convergence") return "ConvergenceSettings";
+  if (part == "refinement") return "RefinementSettings";
+  return "NeighborhoodSettings";
+}
+
+// A value as Python writes it, for "Default X." (which the package tests evaluate).
+std::string python_literal(const py::object& value) {
+  static const py::object enum_type = py::module_::import("enum").attr("Enum");
+  if (py::isinstance(value, enum_type)) {
+    return py::str("{}.{}").format(py::type::handle_of(value).attr("__name__"), value.attr("name"));
+  }
+  return py::repr(value);
+}
+
+// The docstring of a setting's attribute: the table's help, range and unit, and the default read
+// from a default-constructed `defaults`.
+template <typename S>
+std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
+  py::object value = defaults;
+  std::string_view rest = s.field;
+  for (auto dot = rest.find('.'); dot != std::string_view::npos; dot = rest.find('.')) {
+    value = value.attr(std::string(rest.substr(0, dot)).c_str());
+    rest = rest.substr(dot + 1);
+  }
+  value = value.attr(std::string(rest).c_str());
+  std::string doc(s.help);
+  switch (s.kind) {
+    case SettingKind::count:
+    case SettingKind::real:
+      doc += (s.unit.empty() ? ", in " : ", " + std::string(s.unit) + " in ") + s.range.to_string();
+      break;
+    case SettingKind::distance:
+      doc += ", a Distance in " + s.range.to_string() + " scaled units or " +
+             s.metres_range.to_string() + " m";
+      break;
+    case SettingKind::choice:
+      doc += " (" + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
+             " or one of its names)";
+      break;
+    case SettingKind::flag:
+      break;
+  }
+  return doc + ". Keyword " + keyword_of(s.name) + "=. Default " + python_literal(value) + ".";
+}
+
+// Gives every attribute of the settings table its docstring from the table (settings.hpp).
+template <typename S>
+void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, const char* top) {
+  const py::object defaults = m.attr(top)();
+  const py::object property = py::module_::import("builtins").attr("property");
+  for (const auto& s : table) {
+    const std::string cls_name = class_of(s.field, top);
+    if (cls_name != top && std::string_view(top) == "BatchSettings") continue;  // nested: SGD's
+    const py::object cls = m.attr(cls_name.c_str());
+    const std::string field(s.field);
+    const std::string attribute =
+        field.substr(field.find('.') == std::string::npos ? 0 : field.find('.') + 1);
+    const py::object old = cls.attr("__dict__")[attribute.c_str()];
+    py::setattr(
+        cls, attribute.c_str(),
+        property(old.attr("fget"), old.attr("fset"), old.attr("fdel"), attribute_doc(s, defaults)));
+  }
+}
+
+template <typename S>
+std::string summary_of(const std::vector<Setting<S>>& table, const py::object& defaults,
+                       std::string_view indent) {
+  std::string out;
+  std::string line(indent);
+  for (const auto& s : table) {
+    const std::string doc = attribute_doc(s, defaults);
+    const std::string value = doc.substr(doc.rfind("Default ") + 8, std::string::npos);
+    std::string item = keyword_of(s.name) + " (" + value.substr(0, value.size() - 1);
+    if (s.kind == SettingKind::count || s.kind == SettingKind::real) {
+      item += ", " + s.range.to_string();
+    }
+    item += ")";
+    if (&s != &table.back()) item += ",";
+    if (line.size() + item.size() + 1 > 96 && line.size() > indent.size()) {
+      out += line + "\n";
+      line = std::string(indent);
+    }
+    line += (line.size() > indent.size() ? " " : "") + item;
+  }
+  return out + line;
+}
+
+}  // namespace
+
+std::string keyword_summary(const py::module_& core, Solver solver, std::string_view indent) {
+  if (solver == Solver::sgd) {
+    return summary_of(sgd_settings_table(), core.attr("Settings")(), indent);
+  }
+  return summary_of(batch_settings_table(), core.attr("BatchSettings")(), indent);
+}
+
+void bind_settings(py::module_& m) {
+  bind_enums(m);
+  bind_distance(m);
+  bind_optimizer(m);
+  bind_convergence(m);
+  bind_neighborhood(m);
+  bind_sgd_settings(m);
+  bind_batch_settings(m);
+  document_attributes(m, sgd_settings_table(), "Settings");
+  document_attributes(m, batch_settings_table(), "BatchSettings");
 }
 
 }  // namespace sgdicp::python

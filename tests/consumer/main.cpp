@@ -1,8 +1,20 @@
 // Registers a cloud to a shifted copy of itself through the installed package (the shift is
 // below half the 5 cm grid spacing, so the grid cannot alias).
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 
+#include <sgdicp/pairs.hpp>
 #include <sgdicp/sgdicp.hpp>
+
+// sgdicp::tools links too: a pairs file written here reads back.
+bool pairs_file_reads_back() {
+  const auto path = std::filesystem::temp_directory_path() / "sgdicp_consumer_pairs.txt";
+  std::ofstream(path) << "a.ply b.ply 1 0 0 0.5 0 1 0 0 0 0 1 0\n";
+  const auto pairs = sgdicp::read_pairs_file(path);
+  std::filesystem::remove(path);
+  return pairs.size() == 1 && pairs[0].T_reference_source_gt(0, 3) == 0.5;
+}
 
 int main() {
   sgdicp::PointCloud source;
@@ -18,5 +30,5 @@ int main() {
   const double error =
       (r.T_reference_source.topRightCorner<3, 1>() - Eigen::Vector3d(0.012, -0.009, 0.006)).norm();
   std::printf("converged=%d translation error=%.3g m\n", r.converged ? 1 : 0, error);
-  return r.converged && error < 0.005 ? 0 : 1;
+  return r.converged && error < 0.005 && pairs_file_reads_back() ? 0 : 1;
 }

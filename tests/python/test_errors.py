@@ -84,10 +84,16 @@ def test_bad_initial_transforms_raise_value_error(init, message):
 @pytest.mark.parametrize(
     "overrides, message",
     [
-        ({"batch_size": 0}, "batch size must be at least 1"),
-        ({"learning_rate": -1.0}, "learning rate must be positive"),
-        ({"max_distance": 0.0}, "max correspondence distance must be positive"),
-        ({"window": 3}, "window must be at least 8"),
+        ({"batch_size": 0}, r"batch_size=0: must be in \[1, 10000000\]"),
+        ({"learning_rate": -1.0}, r"learning_rate=-1: must be in \[1e-06, 10000\]"),
+        ({"max_distance": 0.0}, r"max_distance=0 scaled: must be in \[1e-06, 10\] scaled"),
+        ({"window": 3}, r"window=3: must be in \[8, 100000\]"),
+        ({"window": 10**9}, r"window=1000000000: must be in \[8, 100000\]"),
+        ({"epsilon": 1e308}, r"epsilon=1e\+308: must be in \(0, 1\]"),
+        ({"learning_rate": 1e-308}, r"learning_rate=1e-308: must be in"),
+        ({"distance_factor": 1e-308}, r"distance_factor=1e-308: must be in \[1, 1000\]"),
+        ({"kernel": "huber", "kernel_scale": 1e-308}, "kernel_scale=1e-308 scaled: must be in"),
+        ({"batch_size": 100000, "window": 10000}, r"batch_size= x window= = 1000000000"),
         ({"batch_size": -5}, "batch_size must be >= 0"),
         ({"optimizer": "newton"}, "unknown optimizer 'newton'"),
         ({"scaling_origin": "middle"}, "unknown scaling origin 'middle'"),
@@ -95,8 +101,8 @@ def test_bad_initial_transforms_raise_value_error(init, message):
         ({"max_distance_unit": "m"}, "max_distance_unit applies to max_distance, min_distance"),
         ({"cost": "plane"}, "unknown cost 'plane'"),
         ({"kernel": "tukey"}, "unknown kernel 'tukey'"),
-        ({"trim": 0.0}, r"trim ratio must be in \(0, 1\]"),
-        ({"kernel_scale": 0.0}, "kernel scale must be positive"),
+        ({"trim": 0.0}, r"trim=0: must be in \[0.01, 1\]"),
+        ({"kernel_scale": 0.0}, "kernel_scale=0 scaled: must be in"),
     ],
 )
 def test_bad_settings_raise_value_error(overrides, message):
@@ -117,13 +123,24 @@ def test_bad_settings_raise_value_error(overrides, message):
         ({"batch_size": True}, "batch_size must be an integer, got bool"),
         ({"learning_rate": "0.1"}, "learning_rate must be a number, got str"),
         ({"average": 1}, "average must be True or False, got int"),
-        ({"optimizer": 3}, "optimizer must be an OptimizerType or one of"),
+        ({"optimizer": 3}, "optimizer must be one of 'sgd', 'momentum'"),
         ({"trim_ratio": 0.5}, r"did you mean 'trim'\?"),
     ],
 )
 def test_unknown_keywords_and_wrong_types_raise_type_error(overrides, message):
     with pytest.raises(TypeError, match=message):
         sgd_icp.register(GOOD, GOOD, **overrides)
+
+
+def test_unsigned_settings_reject_negative_and_huge_values():
+    # Neither -1 nor 2**64 may wrap around to 2**64 - 1.
+    for keyword in ("max_iterations", "seed", "refine_stages", "evaluation_points"):
+        with pytest.raises(sgd_icp.InvalidSettingsError, match=f"{keyword} must be >= 0"):
+            sgd_icp.Settings(**{keyword: -1})
+        with pytest.raises(sgd_icp.InvalidSettingsError, match=f"{keyword} must be at most 2\\^64-1"):
+            sgd_icp.Settings(**{keyword: 2**64})
+    with pytest.raises(sgd_icp.InvalidSettingsError, match=r"max_iterations=1000000000000: must be in"):
+        sgd_icp.Settings(max_iterations=10**12)
 
 
 def test_method_is_not_a_setting():
@@ -162,7 +179,7 @@ def test_attribute_assignment_is_checked():
         s.optimizer.type = "newton"
     s.refinement.min_distance = sgd_icp.Distance.metres(0.001)
     s.convergence.window = 4
-    with pytest.raises(ValueError, match="window must be at least 8"):
+    with pytest.raises(ValueError, match=r"convergence.window = 4: must be in \[8, 100000\]"):
         s.validate()
 
 

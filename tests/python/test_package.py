@@ -5,6 +5,7 @@ from __future__ import annotations
 import ast
 import enum
 import inspect
+import sys
 from pathlib import Path
 
 import sgd_icp
@@ -60,6 +61,27 @@ def test_stubs_match_the_module():
             assert members == runtime_members(obj), name
 
 
+def test_stub_docstrings_are_the_modules():
+    # The stub adds the types; its docstrings are copies of the module's, made by
+    # python/tools/sync_stub.py (run it after changing a docstring in the bindings).
+    tools = Path(__file__).resolve().parents[2] / "python" / "tools"
+    sys.path.insert(0, str(tools))
+    try:
+        import sync_stub
+    finally:
+        sys.path.remove(str(tools))
+    assert sync_stub.differences(STUB.read_text(), _core) == [], (
+        "run python/tools/sync_stub.py to copy the module's docstrings into the stub"
+    )
+
+
+def test_setting_docstrings_come_from_the_library_table():
+    # Each attribute of the settings table says its range and keyword (settings.hpp).
+    assert "in [8, 100000]" in inspect.getdoc(sgd_icp.ConvergenceSettings.window)
+    assert "Keyword window=." in inspect.getdoc(sgd_icp.ConvergenceSettings.window)
+    assert "in [0.01, 1]" in inspect.getdoc(sgd_icp.BatchSettings.trim_ratio)
+
+
 def test_everything_public_is_exported_and_documented():
     assert set(sgd_icp.__all__) == {n for n in dir(_core) if not n.startswith("_")} | {
         "__version__"
@@ -79,10 +101,11 @@ def test_everything_public_is_exported_and_documented():
 def test_register_docstring_lists_every_keyword_with_its_default():
     doc = inspect.getdoc(sgd_icp.register)
     for keyword in (
-        "batch_size (160)",
-        "optimizer ('adam'",
+        "batch_size (160, [1, 10000000])",
+        "optimizer (OptimizerType.adam)",
         "learning_rate (0.01",
-        "max_distance (0.5)",
+        "max_distance (Distance.scaled(0.5))",
+        "window (20, [8, 100000])",
         "max_distance_unit ('scaled'",
         "record_trace (False)",
     ):

@@ -216,3 +216,23 @@ def test_neighborhood_settings():
     assert s.neighborhood.k == 8
     with pytest.raises(ValueError, match="viewpoint must be 3 numbers"):
         s.neighborhood.viewpoint = (1.0, 2.0)
+
+
+@pytest.mark.parametrize("name", ["sgd", "momentum", "rmsprop", "adam", "gauss-newton"])
+def test_paper_preset_uses_the_same_step_table(name):
+    # One table of step sizes: Settings.paper(rule) and Settings(optimizer=rule) agree (the paper
+    # preset with Gauss-Newton ran with 0.01 instead of 1 before).
+    assert Settings.paper(name).optimizer.learning_rate == Settings(optimizer=name).optimizer.learning_rate
+
+
+def test_scaling_origin_spellings():
+    for name in ("corner", "lower_corner", "lower-corner", ScalingOrigin.lower_corner):
+        assert Settings(scaling_origin=name).scaling_origin == ScalingOrigin.lower_corner
+    assert Settings(scaling_origin="center").scaling_origin == ScalingOrigin.center
+
+
+def test_settings_compare_field_by_field():
+    assert Settings() == Settings() and Settings(seed=3) != Settings()
+    s = Settings()
+    s.neighborhood.viewpoint = (0.0, 0.0, 1.0)
+    assert s != Settings()

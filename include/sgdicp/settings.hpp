@@ -1,0 +1,193 @@
+#pragma once
+// The settings of both solvers (SGD-ICP and the batch baselines) and one table that describes
+// every setting a user can name: its name (the CLI's option without "--"; Python's keyword with
+// '_' for '-'), its C++ member, its kind, its valid range and unit, and its help. validate()
+// checks the ranges of this table, the CLI builds its options from it, the Python keyword
+// overrides apply through it, and the settings table of docs/registration.md is tested against
+// it. Defaults are never written in the table: they are read from SgdSettings{},
+// SgdSettings::paper() and BatchSettings{}.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "sgdicp/convergence.hpp"
+#include "sgdicp/cost.hpp"
+#include "sgdicp/distance.hpp"
+#include "sgdicp/optimizer.hpp"
+#include "sgdicp/preprocessing.hpp"
+#include "sgdicp/refinement.hpp"
+#include "sgdicp/robust_kernel.hpp"
+#include "sgdicp/scaling.hpp"
+
+namespace sgdicp {
+
+/// How validate() names a setting in its messages: the C++ member (convergence.window), the CLI
+/// option (--window) or the Python keyword (window=).
+enum class SettingNames { field, cli, python };
+
+struct SgdSettings {
+  /// m of the paper: source points per mini-batch.
+  std::size_t batch_size = 160;
+  /// d_max: pairs farther apart are rejected (paper: 0.5 in scaled units).
+  Distance max_correspondence_distance = Distance::scaled(0.5);
+  /// Default: Adam with a step of 0.01 scaled units, measured best over the real pairs
+  /// (docs/design.md): it keeps the paper's wide basin (KITTI copies moved by 30 m), which the
+  /// greedier Gauss-Newton step loses, and reaches cm accuracy with the refinement stages.
+  OptimizerSettings optimizer{OptimizerType::adam, default_learning_rate(OptimizerType::adam)};
+  ConvergenceSettings convergence{};
+  RefinementSettings refinement{};
+  /// Cost of a pair (cost.hpp): the paper's point-to-point, point-to-plane, or plane-to-plane
+  /// (GICP). The plane costs need normals / covariances (estimated with `neighborhood` when the
+  /// clouds lack them).
+  CostType cost = CostType::point_to_point;
+  /// Robust kernel on each pair's residual (robust_kernel.hpp) ...
+  KernelType kernel = KernelType::none;
+  /// ... and its scale: the residual size where it starts to down-weight.
+  Distance kernel_scale = Distance::scaled(0.01);
+  /// Keep only this fraction of each mini-batch's pairs, the closest ones (trimmed ICP,
+  /// Chetverikov et al. 2002), for partial overlap; 1 keeps all.
+  double trim_ratio = 1.0;
+  /// Neighbourhoods for normals and covariances when a plane cost needs them.
+  NeighborhoodSettings neighborhood{};
+  /// Origin of the scaled space = pivot of roll, pitch, yaw. The paper's lower corner couples
+  /// rotation and translation strongly (a small rotation about a far corner is a large
+  /// translation of the points); the box centre decouples them (docs/design.md).
+  ScalingOrigin scaling_origin = ScalingOrigin::center;
+  /// Hard limit on iterations (mini-batches); reaching it means "not converged".
+  std::size_t max_iterations = 4000;
+  /// Seed of the mini-batch sampler; same inputs and seed give the same result.
+  std::uint64_t seed = 2019;
+  /// Return the mean of the iterates of the final stage's stationary window (the last
+  /// `window` iterations) instead of the last iterate.
+  bool average_iterates = true;
+  /// Source points used for the final inlier statistics (0 = all).
+  std::size_t evaluation_points = 2000;
+  /// Record a per-iteration trace in the result.
+  bool record_trace = false;
+  /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report
+  /// it in the result (evaluation.hpp); costs about `evaluation_points` k-nearest queries.
+  bool check_degeneracy = true;
+
+  /// The paper's settings: m = 160, d_max = 0.5 scaled, the step rule's step size
+  /// (default_learning_rate: the paper's fixed step alpha = 2, Adam 0.01), no refinement, the
+  /// last iterate returned, the paper's scaling origin (lower corner).
+  static SgdSettings paper(OptimizerType optimizer = OptimizerType::sgd);
+
+  /// Throws InvalidSettingsError naming the first setting outside its range (settings_table())
+  /// or contradicting another, spelled as `names` says.
+  void validate(SettingNames names = SettingNames::field) const;
+
+  bool operator==(const SgdSettings&) const = default;
+};
+
+struct BatchSettings {
+  /// point-to-point (icp), point-to-plane (icp-plane) or plane-to-plane (gicp).
+  CostType cost = CostType::point_to_point;
+  /// d_max: pairs farther apart are rejected. Scaled units are a fraction of the largest side
+  /// of the joint bounding box (e.g. 0.05 = 6 m on a 120 m LiDAR scan, 10 cm on a 2 m Kinect view).
+  Distance max_correspondence_distance = Distance::scaled(0.05);
+  KernelType kernel = KernelType::none;
+  Distance kernel_scale = Distance::scaled(0.01);
+  /// Keep only this fraction of the pairs, the closest ones (trimmed ICP).
+  double trim_ratio = 1.0;
+  std::size_t max_iterations = 100;
+  /// Converged when an iteration moves the translation less than this (scaled units: 0.1 mm on
+  /// a 10 m room, 1.5 mm on a 150 m LiDAR scene) ...
+  double translation_tolerance = 1e-5;
+  /// ... and the rotation less than this (rad).
+  double rotation_tolerance = 1e-5;
+  /// Initial Levenberg-Marquardt damping, relative to the mean diagonal of J^T J; 0 = plain
+  /// Gauss-Newton. Unused by point-to-point (closed form).
+  double initial_damping = 1e-6;
+  /// Neighbourhoods for the normals / covariances of the plane costs (estimated when missing).
+  NeighborhoodSettings neighborhood{};
+  std::size_t evaluation_points = 2000;  ///< see SgdSettings
+  bool check_degeneracy = true;          ///< see SgdSettings
+  /// Record a per-iteration trace in the result: the pose after each iteration, every source
+  /// point processed per iteration, step size 1, d_max, the pairs kept and, as the cost, their
+  /// mean squared distance before the step (scaled units^2).
+  bool record_trace = false;
+
+  static BatchSettings icp();        ///< point-to-point
+  static BatchSettings icp_plane();  ///< point-to-plane
+  static BatchSettings gicp();       ///< plane-to-plane
+
+  /// Throws InvalidSettingsError naming the first setting outside its range, spelled as `names`
+  /// says.
+  void validate(SettingNames names = SettingNames::field) const;
+
+  bool operator==(const BatchSettings&) const = default;
+};
+
+// ---- the table of settings
+
+enum class SettingKind {
+  count,     ///< a non-negative integer
+  real,      ///< a finite floating-point number
+  flag,      ///< true or false
+  distance,  ///< a Distance; its range depends on its unit
+  choice,    ///< one of the names of an enum (enum_names.hpp)
+};
+
+/// An interval of valid values; each end closed or open.
+struct ValueRange {
+  double min = 0.0;
+  double max = 0.0;
+  bool min_open = false;
+  bool max_open = false;
+
+  [[nodiscard]] bool contains(double v) const {
+    return (min_open ? v > min : v >= min) && (max_open ? v < max : v <= max);
+  }
+  /// "[8, 100000]", "(0, 1]", "[0, 2^64-1]".
+  [[nodiscard]] std::string to_string() const;
+};
+
+/// The value of one setting, whatever its kind (a choice by its canonical name).
+using SettingValue = std::variant<std::uint64_t, double, bool, Distance, std::string>;
+
+template <typename S>
+struct Setting {
+  std::string_view name;   ///< the CLI option without "--"; Python: '-' replaced by '_'
+  std::string_view field;  ///< the C++ member, e.g. "optimizer.learning_rate"
+  SettingKind kind;
+  ValueRange range;         ///< count and real; a distance in scaled units
+  ValueRange metres_range;  ///< a distance in metres
+  std::string_view unit;    ///< of a real, for help and docs ("rad", "scaled units"; "" = none)
+  std::string_view help;    ///< one sentence, no default (read from the settings)
+  std::vector<std::string_view> (*choices)();  ///< the names of a choice; nullptr otherwise
+  SettingValue (*get)(const S&);
+  /// Sets the value (a choice by any accepted name); throws InvalidSettingsError for an unknown
+  /// name. Setting "optimizer" also sets the learning rate to default_learning_rate().
+  void (*set)(S&, const SettingValue&);
+  /// Not a CLI option (the CLI chooses the cost with --method and records a trace with --trace).
+  bool keyword_only = false;
+
+  /// `name` as the user spells it: --learning-rate, learning_rate=, optimizer.learning_rate.
+  [[nodiscard]] std::string spelled(SettingNames names) const;
+};
+
+/// Every setting of SgdSettings a user can name, in the order in which they are applied
+/// ("optimizer" first: it sets the learning rate, which a later "learning-rate" overrides).
+[[nodiscard]] const std::vector<Setting<SgdSettings>>& sgd_settings_table();
+/// Every setting of BatchSettings a user can name (those shared with SGD have the same name).
+[[nodiscard]] const std::vector<Setting<BatchSettings>>& batch_settings_table();
+
+/// The setting called `name` ('_' may stand for '-'), or nullptr.
+[[nodiscard]] const Setting<SgdSettings>* find_sgd_setting(std::string_view name);
+[[nodiscard]] const Setting<BatchSettings>* find_batch_setting(std::string_view name);
+
+/// A value as the docs and --help print it: 160, 0.01, 1e-06, true, 0.5 scaled, 2 m, adam.
+[[nodiscard]] std::string format_value(const SettingValue& value);
+/// A number in its shortest round-trip form (0.01, 1e-06, 12.59).
+[[nodiscard]] std::string format_number(double value);
+
+/// Throws InvalidSettingsError "SPELLED VALUE: must be in RANGE" unless `value` lies in the
+/// setting's range (a distance: the range of its unit).
+template <typename S>
+void check_range(const Setting<S>& setting, const SettingValue& value, SettingNames names);
+
+}  // namespace sgdicp

@@ -1,0 +1,521 @@
+#include "sgdicp/settings.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
+#include "sgdicp/error.hpp"
+
+namespace sgdicp {
+
+// ---- presets
+
+SgdSettings SgdSettings::paper(OptimizerType optimizer) {
+  SgdSettings s;
+  s.batch_size = 160;
+  s.max_correspondence_distance = Distance::scaled(0.5);
+  s.optimizer.type = optimizer;
+  // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
+  // divides by the gradient's RMS), so alpha = 2 would jump twice across the unit cube; we use
+  // the original implementation's Adam step 0.1 scaled down by the measured factor
+  // (docs/design.md). Both come from the one table of step sizes.
+  s.optimizer.learning_rate = default_learning_rate(optimizer, s.optimizer.momentum);
+  s.scaling_origin = ScalingOrigin::lower_corner;
+  s.refinement.stages = 0;
+  s.average_iterates = false;
+  return s;
+}
+
+BatchSettings BatchSettings::icp() {
+  return BatchSettings{};
+}
+
+BatchSettings BatchSettings::icp_plane() {
+  BatchSettings s;
+  s.cost = CostType::point_to_plane;
+  return s;
+}
+
+BatchSettings BatchSettings::gicp() {
+  BatchSettings s;
+  s.cost = CostType::plane_to_plane;
+  return s;
+}
+
+// ---- values
+
+std::string format_number(double value) {
+  // Integers as integers (10000000, not 1e+07); others with 6 significant digits, like %g.
+  if (std::isfinite(value) && value == std::floor(value) && std::abs(value) < 1e15) {
+    return std::to_string(static_cast<long long>(value));
+  }
+  char buffer[64];
+  const auto [end, ec] =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 6);
+  return ec == std::errc() ? std::string(buffer, end) : std::string("?");
+}
+
+std::string ValueRange::to_string() const {
+  const auto bound = [](double v) {
+    return v >= 0x1p64 ? std::string("2^64-1") : format_number(v);
+  };
+  std::string out = min_open ? "(" : "[";
+  out += bound(min);
+  out += ", ";
+  out += bound(max);
+  out += max_open ? ")" : "]";
+  return out;
+}
+
+std::string format_value(const SettingValue& value) {
+  struct Visitor {
+    std::string operator()(std::uint64_t v) const { return std::to_string(v); }
+    std::string operator()(double v) const { return format_number(v); }
+    std::string operator()(bool v) const { return v ? "true" : "false"; }
+    std::string operator()(const Distance& d) const {
+      return format_number(d.value) + (d.unit == Distance::Unit::metres ? " m" : " scaled");
+    }
+    std::string operator()(const std::string& name) const { return name; }
+  };
+  return std::visit(Visitor{}, value);
+}
+
+template <typename S>
+std::string Setting<S>::spelled(SettingNames names) const {
+  switch (names) {
+    case SettingNames::cli:
+      return "--" + std::string(name);
+    case SettingNames::python: {
+      std::string keyword(name);
+      for (char& c : keyword) c = c == '-' ? '_' : c;
+      return keyword + "=";
+    }
+    case SettingNames::field:
+      break;
+  }
+  return std::string(field);
+}
+
+template <typename S>
+void check_range(const Setting<S>& setting, const SettingValue& value, SettingNames names) {
+  double number = 0.0;
+  const ValueRange* range = &setting.range;
+  std::string unit;
+  if (const auto* count = std::get_if<std::uint64_t>(&value)) {
+    number = static_cast<double>(*count);
+  } else if (const auto* real = std::get_if<double>(&value)) {
+    number = *real;
+  } else if (const auto* distance = std::get_if<Distance>(&value)) {
+    number = distance->value;
+    const bool metres = distance->unit == Distance::Unit::metres;
+    if (metres) range = &setting.metres_range;
+    unit = metres ? " m" : " scaled units";
+  } else {
+    return;  // flags and choices have no range
+  }
+  if (std::isfinite(number) && range->contains(number)) return;
+  const std::string separator = names == SettingNames::cli     ? " "
+                                : names == SettingNames::field ? " = "
+                                                               : "";
+  throw InvalidSettingsError(setting.spelled(names) + separator + format_value(value) +
+                             ": must be in " + range->to_string() + unit);
+}
+
+// ---- the tables
+
+namespace detail {
+namespace {
+
+// Every distance in metres: a micrometre to a thousand kilometres (a 15 cm scan to a km map).
+constexpr ValueRange kMetresRange{1e-6, 1e6};
+
+template <typename T>
+constexpr SettingKind kind_of() {
+  if constexpr (std::is_same_v<T, bool>) {
+    return SettingKind::flag;
+  } else if constexpr (std::is_unsigned_v<T>) {
+    return SettingKind::count;
+  } else if constexpr (std::is_floating_point_v<T>) {
+    return SettingKind::real;
+  } else if constexpr (std::is_same_v<T, Distance>) {
+    return SettingKind::distance;
+  } else {
+    static_assert(std::is_enum_v<T>);
+    return SettingKind::choice;
+  }
+}
+
+template <typename T>
+SettingValue to_value(const T& v) {
+  if constexpr (kind_of<T>() == SettingKind::count) {
+    return static_cast<std::uint64_t>(v);
+  } else if constexpr (kind_of<T>() == SettingKind::choice) {
+    return std::string(enum_name(v));
+  } else {
+    return v;
+  }
+}
+
+template <typename T>
+T from_value(const SettingValue& v) {
+  if constexpr (kind_of<T>() == SettingKind::count) {
+    return static_cast<T>(std::get<std::uint64_t>(v));
+  } else if constexpr (kind_of<T>() == SettingKind::choice) {
+    return parse_enum<T>(std::get<std::string>(v));
+  } else {
+    return std::get<T>(v);
+  }
+}
+
+template <typename S, auto... Members>
+struct Field {
+  static auto& ref(S& s) { return (s.*....*Members); }
+  static const auto& ref(const S& s) { return (s.*....*Members); }
+  using Type = std::remove_cvref_t<decltype(ref(std::declval<S&>()))>;
+};
+
+// The description of one setting; `noun` names a choice's values in an unknown-name message.
+struct Describe {
+  std::string_view name;
+  std::string_view field;
+  ValueRange range{};
+  std::string_view unit{};
+  std::string_view help{};
+  bool keyword_only = false;
+};
+
+template <typename S, auto... Members>
+Setting<S> setting(const Describe& d) {
+  using F = Field<S, Members...>;
+  using T = typename F::Type;
+  Setting<S> s;
+  s.name = d.name;
+  s.field = d.field;
+  s.kind = kind_of<T>();
+  s.range = d.range;
+  s.metres_range = kMetresRange;
+  s.unit = d.unit;
+  s.help = d.help;
+  s.keyword_only = d.keyword_only;
+  if constexpr (kind_of<T>() == SettingKind::choice) {
+    s.choices = [] { return canonical_names<T>(); };
+  } else {
+    s.choices = nullptr;
+  }
+  s.get = [](const S& x) { return to_value(F::ref(x)); };
+  s.set = [](S& x, const SettingValue& v) { F::ref(x) = from_value<T>(v); };
+  return s;
+}
+
+}  // namespace
+}  // namespace detail
+
+namespace {
+
+using detail::Describe;
+using detail::setting;
+using S = SgdSettings;
+using B = BatchSettings;
+using O = OptimizerSettings;
+using C = ConvergenceSettings;
+using R = RefinementSettings;
+using N = NeighborhoodSettings;
+
+// Ranges (docs/registration.md explains each): wide enough for every real use, from a 15 cm
+// scan to a km-scale map, narrow enough that no value crashes, allocates absurdly or returns the
+// initial pose as if converged.
+constexpr double kUint64Max = 0x1p64;
+// A distance in scaled units: a millionth of the scene (below that, float32 coordinates cannot
+// resolve it) to ten scenes (the pose is declared diverged there).
+constexpr ValueRange kScaledRange{1e-6, 10.0};
+constexpr ValueRange kDecay{0.0, 1.0, false, true};  // [0, 1)
+// The fixed step is a gradient multiplier: large ones are legitimate on small gradients, and a
+// step that blows the pose up is reported as diverged.
+constexpr ValueRange kLearningRate{1e-6, 1e4};
+constexpr ValueRange kDamping{0.0, 100.0};
+constexpr ValueRange kTolerance{0.0, 0.01};
+constexpr ValueRange kTrim{0.01, 1.0};
+constexpr ValueRange kIterations{1.0, 1e9};
+constexpr ValueRange kNeighbors{3.0, 1000.0};
+constexpr ValueRange kEvaluationPoints{0.0, 4294967295.0};
+// batch_size x window pair distances are kept for the refinement (4 bytes each, twice).
+constexpr double kMaxWindowPairs = 1e8;
+
+// The shared texts of settings that both solvers have.
+constexpr std::string_view kMaxDistanceHelp = "Correspondence rejection distance d_max";
+constexpr std::string_view kKernelHelp = "Robust kernel on the pair residuals";
+constexpr std::string_view kKernelScaleHelp =
+    "Kernel scale c, the residual size where down-weighting starts";
+constexpr std::string_view kTrimHelp =
+    "Keep only this fraction of the pairs (per mini-batch for SGD, per iteration for batch "
+    "methods), the closest ones: trimmed ICP for partial overlap";
+constexpr std::string_view kNeighborsHelp =
+    "Plane costs: neighbours per point (itself included) for normals and covariances";
+constexpr std::string_view kEvaluationHelp =
+    "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all";
+constexpr std::string_view kDegeneracyHelp =
+    "Check the final alignment for degenerate geometry (plane, corridor) and report it";
+constexpr std::string_view kTraceHelp = "Record a per-iteration trace in the result";
+constexpr std::string_view kCostHelp =
+    "Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP)";
+
+Setting<S> optimizer_setting() {
+  Setting<S> s = setting<S, &S::optimizer, &O::type>(
+      {"optimizer",
+       "optimizer.type",
+       {},
+       {},
+       "Step rule of eq. 3 (sgd: fixed step; gauss-newton: A = inverse of the averaged "
+       "mini-batch Gauss-Newton matrix); also sets the learning rate to the rule's own unless "
+       "one is given"});
+  s.set = [](S& x, const SettingValue& v) {
+    x.optimizer.type = parse_enum<OptimizerType>(std::get<std::string>(v));
+    x.optimizer.learning_rate = default_learning_rate(x.optimizer.type, x.optimizer.momentum);
+  };
+  return s;
+}
+
+// The step rule and the mini-batch (the first: "optimizer" sets the learning rate).
+std::vector<Setting<S>> step_settings() {
+  return {
+      optimizer_setting(),
+      setting<S, &S::optimizer, &O::learning_rate>(
+          {"learning-rate", "optimizer.learning_rate", kLearningRate, "scaled units",
+           "Step size alpha (adaptive rules: a length per step; sgd, momentum: a gradient "
+           "multiplier; gauss-newton: a fraction of the Newton step)"}),
+      setting<S, &S::batch_size>({"batch-size",
+                                  "batch_size",
+                                  {1.0, 1e7},
+                                  "",
+                                  "Mini-batch size m, source points per iteration"}),
+      setting<S, &S::max_correspondence_distance>(
+          {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
+      setting<S, &S::max_iterations>(
+          {"max-iterations", "max_iterations", kIterations, "",
+           "Iteration limit (mini-batches); reaching it reports 'not converged'"}),
+      setting<S, &S::seed>({"seed",
+                            "seed",
+                            {0.0, kUint64Max},
+                            "",
+                            "Seed of the mini-batch sampler (same seed, same result)"}),
+      setting<S, &S::optimizer, &O::momentum>(
+          {"momentum", "optimizer.momentum", kDecay, "", "Momentum: velocity decay"}),
+      setting<S, &S::optimizer, &O::beta1>(
+          {"beta1", "optimizer.beta1", kDecay, "", "Adam: decay of the gradient mean"}),
+      setting<S, &S::optimizer, &O::beta2>(
+          {"beta2", "optimizer.beta2", kDecay, "", "Adam: decay of the squared-gradient mean"}),
+      setting<S, &S::optimizer, &O::rms_decay>({"rms-decay", "optimizer.rms_decay", kDecay, "",
+                                                "RMSProp: decay of the squared-gradient mean"}),
+      setting<S, &S::optimizer, &O::epsilon>({"epsilon",
+                                              "optimizer.epsilon",
+                                              {0.0, 1.0, true, false},
+                                              "scaled units",
+                                              "Adam/RMSProp: added to the gradient RMS"}),
+      setting<S, &S::optimizer, &O::hessian_decay>(
+          {"hessian-decay", "optimizer.hessian_decay", kDecay, "",
+           "Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton "
+           "matrices"}),
+      setting<S, &S::optimizer, &O::damping>(
+          {"damping", "optimizer.damping", kDamping, "",
+           "Gauss-Newton step: Levenberg damping, relative to the mean diagonal of the averaged "
+           "matrix (batch methods: the initial Levenberg-Marquardt damping)"}),
+  };
+}
+
+// When a stage, and the run, stop.
+std::vector<Setting<S>> stop_settings() {
+  return {
+      setting<S, &S::convergence, &C::window>(
+          {"window",
+           "convergence.window",
+           {8.0, 1e5},
+           "",
+           "Convergence: iterations per test window (a stage ends after a window whose mean "
+           "mini-batch gradient is not significantly non-zero); also the length of the final "
+           "iterate average"}),
+      setting<S, &S::convergence, &C::chi2>(
+          {"chi2",
+           "convergence.chi2",
+           {0.0, 1000.0, true, false},
+           "",
+           "Convergence: critical chi-square value (6 dof) of the Hotelling test on the "
+           "window's mean gradient; larger stops earlier"}),
+      setting<S, &S::convergence, &C::max_path_efficiency>(
+          {"path-efficiency",
+           "convergence.max_path_efficiency",
+           {0.0, 1.0, true, false},
+           "",
+           "Convergence: a stationary window's net displacement over its path length must be at "
+           "most this (1 = straight travel, ~0.2 = jitter)"}),
+      setting<S, &S::convergence, &C::translation_tolerance>(
+          {"translation-tolerance", "convergence.translation_tolerance", kTolerance, "scaled units",
+           "Convergence: a window whose steps each move the translation less than this also "
+           "ends a stage (batch methods: an iteration that moves it less converges)"}),
+      setting<S, &S::convergence, &C::rotation_tolerance>(
+          {"rotation-tolerance", "convergence.rotation_tolerance", kTolerance, "rad",
+           "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
+           "|d yaw|; batch methods: rotation angle)"}),
+      setting<S, &S::refinement, &R::stages>(
+          {"refine-stages",
+           "refinement.stages",
+           {0.0, 100.0},
+           "",
+           "Refinement stages after the first stationary stage (0 = the paper's single "
+           "phase)"}),
+      setting<S, &S::refinement, &R::step_decay>({"step-decay",
+                                                  "refinement.step_decay",
+                                                  {0.01, 1.0},
+                                                  "",
+                                                  "Refinement: step-size multiplier per stage"}),
+      setting<S, &S::refinement, &R::distance_factor>(
+          {"distance-factor",
+           "refinement.distance_factor",
+           {1.0, 1000.0},
+           "",
+           "Refinement: new d_max = factor x median correspondence distance (below 1 it would "
+           "reject most pairs: use trim for that)"}),
+      setting<S, &S::refinement, &R::min_distance>({"min-distance", "refinement.min_distance",
+                                                    kScaledRange, "",
+                                                    "Refinement: lower bound of d_max"}),
+  };
+}
+
+// What is returned, and how pairs are weighed.
+std::vector<Setting<S>> result_and_pair_settings() {
+  return {
+      setting<S, &S::average_iterates>(
+          {"average",
+           "average_iterates",
+           {},
+           "",
+           "Return the mean of the window iterates of the final stage's stationary window "
+           "(true) or the last iterate (false)"}),
+      setting<S, &S::scaling_origin>(
+          {"scaling-origin",
+           "scaling_origin",
+           {},
+           "",
+           "Origin of the scaled space and pivot of the rotation (lower-corner, also spelled "
+           "corner: the paper, points in [0, 1]; center: points in [-0.5, 0.5])"}),
+      setting<S, &S::evaluation_points>(
+          {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
+      setting<S, &S::cost>({"cost", "cost", {}, "", kCostHelp, true}),
+      setting<S, &S::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
+      setting<S, &S::kernel_scale>(
+          {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
+      setting<S, &S::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
+      setting<S, &S::neighborhood, &N::k>(
+          {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
+      setting<S, &S::check_degeneracy>(
+          {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
+  };
+}
+
+std::vector<Setting<S>> make_sgd_table() {
+  std::vector<Setting<S>> table = step_settings();
+  for (auto part : {stop_settings(), result_and_pair_settings()}) {
+    table.insert(table.end(), part.begin(), part.end());
+  }
+  return table;
+}
+
+std::vector<Setting<B>> make_batch_table() {
+  return {
+      setting<B, &B::max_correspondence_distance>(
+          {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
+      setting<B, &B::max_iterations>(
+          {"max-iterations", "max_iterations", kIterations, "",
+           "Iteration limit (passes over the source); reaching it reports 'not converged'"}),
+      setting<B, &B::initial_damping>(
+          {"damping", "initial_damping", kDamping, "",
+           "icp-plane, gicp: initial Levenberg-Marquardt damping, relative to the mean diagonal "
+           "of J^T J; 0 = Gauss-Newton"}),
+      setting<B, &B::translation_tolerance>(
+          {"translation-tolerance", "translation_tolerance", kTolerance, "scaled units",
+           "Converged when an iteration moves the translation less than this ..."}),
+      setting<B, &B::rotation_tolerance>({"rotation-tolerance", "rotation_tolerance", kTolerance,
+                                          "rad",
+                                          "... and the rotation less than this (rotation angle)"}),
+      setting<B, &B::evaluation_points>(
+          {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
+      setting<B, &B::cost>({"cost", "cost", {}, "", kCostHelp, true}),
+      setting<B, &B::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
+      setting<B, &B::kernel_scale>(
+          {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
+      setting<B, &B::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
+      setting<B, &B::neighborhood, &N::k>(
+          {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
+      setting<B, &B::check_degeneracy>(
+          {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
+  };
+}
+
+template <typename T>
+const Setting<T>* find_in(const std::vector<Setting<T>>& table, std::string_view name) {
+  for (const auto& s : table) {
+    if (detail::same_name(s.name, name)) return &s;
+  }
+  return nullptr;
+}
+
+template <typename T>
+void check_table(const T& settings, const std::vector<Setting<T>>& table, SettingNames names) {
+  for (const auto& s : table) check_range(s, s.get(settings), names);
+}
+
+}  // namespace
+
+const std::vector<Setting<SgdSettings>>& sgd_settings_table() {
+  static const std::vector<Setting<SgdSettings>> table = make_sgd_table();
+  return table;
+}
+
+const std::vector<Setting<BatchSettings>>& batch_settings_table() {
+  static const std::vector<Setting<BatchSettings>> table = make_batch_table();
+  return table;
+}
+
+const Setting<SgdSettings>* find_sgd_setting(std::string_view name) {
+  return find_in(sgd_settings_table(), name);
+}
+
+const Setting<BatchSettings>* find_batch_setting(std::string_view name) {
+  return find_in(batch_settings_table(), name);
+}
+
+void SgdSettings::validate(SettingNames names) const {
+  check_table(*this, sgd_settings_table(), names);
+  const double pairs = static_cast<double>(batch_size) * static_cast<double>(convergence.window);
+  if (pairs > kMaxWindowPairs) {
+    const auto* b = find_sgd_setting("batch-size");
+    const auto* w = find_sgd_setting("window");
+    throw InvalidSettingsError(b->spelled(names) + " x " + w->spelled(names) + " = " +
+                               format_number(pairs) + ": must be at most " +
+                               format_number(kMaxWindowPairs) +
+                               " (the pair distances of a window are kept, 8 bytes each)");
+  }
+}
+
+void BatchSettings::validate(SettingNames names) const {
+  check_table(*this, batch_settings_table(), names);
+}
+
+void OptimizerSettings::validate() const {
+  SgdSettings s;
+  s.optimizer = *this;
+  for (const auto& setting : sgd_settings_table()) {
+    if (setting.field.starts_with("optimizer.")) {
+      check_range(setting, setting.get(s), SettingNames::field);
+    }
+  }
+}
+
+template struct Setting<SgdSettings>;
+template struct Setting<BatchSettings>;
+template void check_range(const Setting<SgdSettings>&, const SettingValue&, SettingNames);
+template void check_range(const Setting<BatchSettings>&, const SettingValue&, SettingNames);
+
+}  // namespace sgdicp
