@@ -343,10 +343,10 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   detail::check_pair(reference, settings.cost, T_init);
   const detail::PreparedSource src(source, settings.cost, settings.neighborhood,
                                    BatchPairing::kMinPairs, "the minimum of");
-  const double scale_m =
-      detail::scaling_of(src.cloud(), reference, ScalingOrigin::lower_corner).scale();
-
   RegistrationResult result;
+  const double scale_m = detail::scaling_of(src.cloud(), reference, ScalingOrigin::lower_corner,
+                                            settings.robust_scaling, result)
+                             .scale();
   result.scale_m = scale_m;
   BatchRun run(src.cloud(), reference, settings, scale_m);
   result.T_reference_source = orthonormalized(run.minimise(orthonormalized(T_init), result));

@@ -1,6 +1,7 @@
 #include "sgdicp/nearest_neighbor.hpp"
 
 #include <algorithm>
+#include <mutex>
 #include <string>
 
 #include <nanoflann.hpp>
@@ -71,6 +72,9 @@ struct ReferenceIndex::Impl {
   BoundingBox box;
   CloudAdaptor adaptor;
   KdTree tree;
+  // The bulk box, for the registrations that scale robustly: once, on first use, from any thread.
+  std::once_flag bulk_once;
+  ScalingBox bulk;
 
   Impl(PointCloud reference, const KdTreeSettings& settings)
       : cloud(std::move(reference)),
@@ -109,6 +113,12 @@ const PointCloud& ReferenceIndex::cloud() const noexcept {
 }
 const BoundingBox& ReferenceIndex::bounding_box() const noexcept {
   return impl_->box;
+}
+
+const ScalingBox& ReferenceIndex::bulk_bounding_box() const {
+  std::call_once(impl_->bulk_once,
+                 [this] { impl_->bulk = sgdicp::bulk_bounding_box(impl_->cloud); });
+  return impl_->bulk;
 }
 
 std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,

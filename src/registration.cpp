@@ -237,10 +237,9 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   detail::check_pair(reference, settings.cost, T_init);
   const detail::PreparedSource src(source, settings.cost, settings.neighborhood,
                                    settings.batch_size, "the mini-batch size");
-  const UnitCubeScaling scaling =
-      detail::scaling_of(src.cloud(), reference, settings.scaling_origin);
-
   RegistrationResult result;
+  const UnitCubeScaling scaling = detail::scaling_of(
+      src.cloud(), reference, settings.scaling_origin, settings.robust_scaling, result);
   result.scale_m = scaling.scale();
   SgdRun run(src.cloud(), reference, settings, scaling);
   // Matrices read from text carry few digits: project onto the nearest rotation.

@@ -22,6 +22,7 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   // (docs/design.md). Both come from the one table of step sizes.
   s.optimizer.learning_rate = default_learning_rate(optimizer, s.optimizer.momentum);
   s.scaling_origin = ScalingOrigin::lower_corner;
+  s.robust_scaling = false;
   s.refinement.stages = 0;
   s.average_iterates = false;
   return s;
@@ -256,6 +257,9 @@ constexpr std::string_view kEvaluationHelp =
     "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all";
 constexpr std::string_view kDegeneracyHelp =
     "Check the final alignment for degenerate geometry (plane, corridor) and report it";
+constexpr std::string_view kRobustScalingHelp =
+    "Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's "
+    "bounding box of every point)";
 constexpr std::string_view kTraceHelp = "Record a per-iteration trace in the result";
 constexpr std::string_view kCostHelp =
     "Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP)";
@@ -409,6 +413,8 @@ std::vector<Setting<S>> result_and_pair_settings() {
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
       setting<S, &S::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<S, &S::robust_scaling>(
+          {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
   };
 }
@@ -449,6 +455,8 @@ std::vector<Setting<B>> make_batch_table() {
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
       setting<B, &B::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<B, &B::robust_scaling>(
+          {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
   };
 }

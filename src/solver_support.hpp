@@ -63,11 +63,19 @@ inline void check_pair(const ReferenceIndex& reference, CostType cost,
   check_reference_prepared(reference, cost);
 }
 
-/// The paper's map of both clouds into the unit cube (scaling.hpp).
+/// The paper's map of both clouds into the unit cube (scaling.hpp), from the bounding boxes of
+/// every point or of the bulk of each cloud; the far points left out go into result.far_points.
 [[nodiscard]] inline UnitCubeScaling scaling_of(const PointCloud& source,
                                                 const ReferenceIndex& reference,
-                                                ScalingOrigin origin) {
-  return UnitCubeScaling::from_boxes(BoundingBox::of(source), reference.bounding_box(), origin);
+                                                ScalingOrigin origin, bool robust,
+                                                RegistrationResult& result) {
+  if (!robust) {
+    return UnitCubeScaling::from_boxes(BoundingBox::of(source), reference.bounding_box(), origin);
+  }
+  const ScalingBox source_box = bulk_bounding_box(source);
+  const ScalingBox& reference_box = reference.bulk_bounding_box();
+  result.far_points = source_box.far_points + reference_box.far_points;
+  return UnitCubeScaling::from_boxes(source_box.box, reference_box.box, origin);
 }
 
 /// Ends a run: why it stopped, in the result.

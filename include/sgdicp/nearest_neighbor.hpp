@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "sgdicp/point_cloud.hpp"
+#include "sgdicp/scaling.hpp"
 
 namespace sgdicp {
 
@@ -40,6 +41,8 @@ class ReferenceIndex {
 
   [[nodiscard]] const PointCloud& cloud() const noexcept;
   [[nodiscard]] const BoundingBox& bounding_box() const noexcept;
+  /// The box of the bulk of the reference (scaling.hpp), computed on first use and kept.
+  [[nodiscard]] const ScalingBox& bulk_bounding_box() const;
   [[nodiscard]] std::size_t size() const noexcept { return cloud().size(); }
 
   /// The nearest reference point to query, if one lies within sqrt(max_squared_distance).

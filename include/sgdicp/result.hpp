@@ -62,7 +62,10 @@ struct RegistrationResult {
   double inlier_rmse_m = 0.0;         ///< RMS distance of the inliers, metres
   double final_max_distance_m = 0.0;  ///< d_max at the end (after refinement), metres
   double scale_m = 0.0;               ///< metres per scaled unit
-  double time_ms = 0.0;               ///< wall time of the registration (not of the index build)
+  /// Points of both clouds left out of the scale for lying far from the bulk of their cloud
+  /// (robust_scaling); they are still paired, and d_max rejects them.
+  std::size_t far_points = 0;
+  double time_ms = 0.0;  ///< wall time of the registration (not of the index build)
   /// Geometry check of the final alignment (when requested): the smallest over the largest
   /// eigenvalue of the point-to-plane information matrix of the inlier pairs, in the scaled
   /// space. Near 0, some motion (sliding along a plane or a corridor, turning about an axis of
@@ -79,7 +82,7 @@ void for_each_result_field(F&& f) {
   using R = RegistrationResult;
   f("converged", &R::converged, "True if the convergence test passed after all refinement stages.");
   f("stop_reason", &R::stop_reason,
-    "'converged', 'max_iterations', 'no_correspondences' or 'diverged'.");
+    "'converged', 'max_iterations', 'no_correspondences', 'diverged' or 'no_descent'.");
   f("message", &R::message, "One line on why it stopped.");
   f("iterations", &R::iterations,
     "Mini-batches (batch methods: passes over the source) processed.");
@@ -95,6 +98,9 @@ void for_each_result_field(F&& f) {
   f("final_max_distance_m", &R::final_max_distance_m,
     "d_max at the end (after refinement), metres.");
   f("scale_m", &R::scale_m, "Metres per scaled unit.");
+  f("far_points", &R::far_points,
+    "Points of both clouds left out of the scale for lying far from the bulk of their cloud "
+    "(robust_scaling); still paired, d_max rejects them.");
   f("time_ms", &R::time_ms,
     "Wall time of the registration, milliseconds (KD-tree build excluded).");
   f("constraint_ratio", &R::constraint_ratio,

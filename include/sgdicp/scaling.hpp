@@ -4,6 +4,7 @@
 // and k its largest side, so rotations stay rotations and one step size fits every sensor.
 #include <array>
 #include <cmath>
+#include <cstddef>
 
 #include <Eigen/Core>
 
@@ -30,6 +31,20 @@ constexpr const auto& enum_names(ScalingOrigin) {
 constexpr std::string_view enum_noun(ScalingOrigin) {
   return "scaling origin";
 }
+
+/// The box of a cloud that sets the scale, and how many of its points it leaves out.
+struct ScalingBox {
+  BoundingBox box;
+  std::size_t far_points = 0;  ///< points outside `box`
+};
+
+/// The box of the bulk of a cloud, robust to a few far points (spurious returns, sky points,
+/// bad depth pixels) that would otherwise shrink everything else in the scaled space: the
+/// bounding box of the points that lie near the bulk, where the bulk is the
+/// box between the 1st and 99th percentiles of each coordinate (estimated on at most 4096
+/// points spread over the cloud) and the bulk size its largest side, within two bulk sizes. A cloud
+/// without far points gets its exact bounding box (docs/design.md, "Robust scaling").
+[[nodiscard]] ScalingBox bulk_bounding_box(const PointCloud& cloud);
 
 class UnitCubeScaling {
  public:

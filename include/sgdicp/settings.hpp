@@ -56,6 +56,10 @@ struct SgdSettings {
   /// rotation and translation strongly (a small rotation about a far corner is a large
   /// translation of the points); the box centre decouples them (docs/design.md).
   ScalingOrigin scaling_origin = ScalingOrigin::center;
+  /// Scale from the bulk of each cloud (bulk_bounding_box in scaling.hpp), so that a few far
+  /// points (spurious returns) do not shrink the scene; false = the paper's bounding box of
+  /// every point. The far points left out are counted in RegistrationResult::far_points.
+  bool robust_scaling = true;
   /// Hard limit on iterations (mini-batches); reaching it means "not converged".
   std::size_t max_iterations = 4000;
   /// Seed of the mini-batch sampler; same inputs and seed give the same result.
@@ -106,6 +110,7 @@ struct BatchSettings {
   NeighborhoodSettings neighborhood{};
   std::size_t evaluation_points = 2000;  ///< see SgdSettings
   bool check_degeneracy = true;          ///< see SgdSettings
+  bool robust_scaling = true;            ///< see SgdSettings (the scale of scaled distances)
   /// Record a per-iteration trace in the result: the pose after each iteration, every source
   /// point processed per iteration, step size 1, d_max, the pairs kept and, as the cost, their
   /// mean squared distance before the step (scaled units^2).

@@ -356,6 +356,10 @@ class Settings:
     """Check the final alignment for degenerate geometry (plane, corridor) and report it. Keyword
     check_degeneracy=. Default True.
     """
+    robust_scaling: bool
+    """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
+    bounding box of every point). Keyword robust_scaling=. Default True.
+    """
 
     def __init__(
         self,
@@ -391,6 +395,7 @@ class Settings:
         trim: float = ...,
         neighbors: int = ...,
         check_degeneracy: bool = ...,
+        robust_scaling: bool = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
     ) -> None:
@@ -430,6 +435,7 @@ class Settings:
         trim: float = ...,
         neighbors: int = ...,
         check_degeneracy: bool = ...,
+        robust_scaling: bool = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
     ) -> Settings:
@@ -472,6 +478,7 @@ class Settings:
         trim: float = ...,
         neighbors: int = ...,
         check_degeneracy: bool = ...,
+        robust_scaling: bool = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
     ) -> Settings:
@@ -544,6 +551,10 @@ class BatchSettings:
     """Check the final alignment for degenerate geometry (plane, corridor) and report it. Keyword
     check_degeneracy=. Default True.
     """
+    robust_scaling: bool
+    """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
+    bounding box of every point). Keyword robust_scaling=. Default True.
+    """
     record_trace: bool
     """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
 
@@ -562,6 +573,7 @@ class BatchSettings:
         rotation_tolerance: float = ...,
         evaluation_points: int = ...,
         check_degeneracy: bool = ...,
+        robust_scaling: bool = ...,
         record_trace: bool = ...,
         cost: _CostName = ...,
     ) -> None:
@@ -683,7 +695,7 @@ class RegistrationResult:
         """True if the convergence test passed after all refinement stages."""
     @property
     def stop_reason(self) -> str:
-        """'converged', 'max_iterations', 'no_correspondences' or 'diverged'."""
+        """'converged', 'max_iterations', 'no_correspondences', 'diverged' or 'no_descent'."""
     @property
     def message(self) -> str:
         """One line on why it stopped."""
@@ -714,6 +726,11 @@ class RegistrationResult:
     @property
     def scale_m(self) -> float:
         """Metres per scaled unit."""
+    @property
+    def far_points(self) -> int:
+        """Points of both clouds left out of the scale for lying far from the bulk of their cloud
+        (robust_scaling); still paired, d_max rejects them.
+        """
     @property
     def time_ms(self) -> float:
         """Wall time of the registration, milliseconds (KD-tree build excluded)."""
@@ -830,7 +847,7 @@ def register(
         rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), record_trace (False).
+        check_degeneracy (True), robust_scaling (True), record_trace (False).
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
         batch_size (160, [1, 10000000]), max_distance (Distance.scaled(0.5)),
@@ -844,7 +861,7 @@ def register(
         scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), record_trace (False).
+        check_degeneracy (True), robust_scaling (True), record_trace (False).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in

@@ -255,13 +255,13 @@ std::string repr(const SgdSettings& s) {
              "convergence={}, refinement={}, cost=CostType.{}, kernel=KernelType.{}, "
              "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
              "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
-             "record_trace={!r}, check_degeneracy={!r})")
+             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r})")
       .format(s.batch_size, repr(s.max_correspondence_distance), repr(s.optimizer),
               repr(s.convergence), repr(s.refinement), cost_name(s.cost), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
               s.scaling_origin == ScalingOrigin::center ? "center" : "lower_corner",
               s.max_iterations, s.seed, s.average_iterates, s.evaluation_points, s.record_trace,
-              s.check_degeneracy);
+              s.check_degeneracy, s.robust_scaling);
 }
 
 std::string repr(const BatchSettings& s) {
@@ -270,11 +270,11 @@ std::string repr(const BatchSettings& s) {
              "kernel=KernelType.{}, kernel_scale={}, trim_ratio={!r}, max_iterations={!r}, "
              "translation_tolerance={!r}, rotation_tolerance={!r}, initial_damping={!r}, "
              "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r}, "
-             "record_trace={!r})")
+             "record_trace={!r}, robust_scaling={!r})")
       .format(cost_name(s.cost), repr(s.max_correspondence_distance), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, s.max_iterations, s.translation_tolerance,
               s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
-              s.check_degeneracy, s.record_trace);
+              s.check_degeneracy, s.record_trace, s.robust_scaling);
 }
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
 template <typename T>
@@ -666,6 +666,10 @@ void bind_sgd_settings(py::module_& m) {
   def_flag(settings, "check_degeneracy", &SgdSettings::check_degeneracy,
            "Check the final alignment for degenerate geometry (a plane, a corridor) and report "
            "it in RegistrationResult.constraint_ratio / degenerate. Default True.");
+  def_flag(settings, "robust_scaling", &SgdSettings::robust_scaling,
+           "Scale from the bulk of each cloud, so that a few far points do not shrink the scene "
+           "(False: the paper's bounding box of every point); far points are counted in "
+           "RegistrationResult.far_points. Default True.");
   def_value_methods(settings);
 }
 
@@ -754,6 +758,9 @@ void bind_batch_settings(py::module_& m) {
   def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy,
            "Check the final alignment for degenerate geometry and report it in "
            "RegistrationResult.constraint_ratio / degenerate. Default True.");
+  def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling,
+           "Scale (of the scaled distances and tolerances) from the bulk of each cloud, not "
+           "hostage to a few far points. Default True.");
   def_flag(batch, "record_trace", &BatchSettings::record_trace,
            "Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, "
            "pairs, mean squared pair distance). Default False.");
