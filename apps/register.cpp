@@ -75,11 +75,8 @@ void run(const RegisterOptions& o) {
   if (!o.output.empty()) write_transform(o.output, result.T_reference_source);
   if (!o.trace.empty()) write_trace_csv(o.trace, result);
   if (!o.aligned.empty()) {
-    PointCloud moved = source;
-    const Eigen::Matrix3f r = result.T_reference_source.topLeftCorner<3, 3>().cast<float>();
-    const Eigen::Vector3f t = result.T_reference_source.topRightCorner<3, 1>().cast<float>();
-    for (auto& p : moved.points) p = r * p + t;
-    write_point_cloud(o.aligned, moved);
+    write_point_cloud(o.aligned,
+                      transformed(source, result.T_reference_source, reference_cloud.origin_m));
   }
   if (!o.picture.empty()) {
     render_alignment_png(o.picture, reference_cloud, source, result.T_reference_source);

@@ -341,7 +341,8 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   const detail::Stopwatch clock;
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init);
-  const detail::PreparedSource src(source, settings.cost, settings.neighborhood,
+  const detail::PairFrame frame(reference);
+  const detail::PreparedSource src(source, frame.origin_m(), settings.cost, settings.neighborhood,
                                    BatchPairing::kMinPairs, "the minimum of");
   RegistrationResult result;
   const double scale_m = detail::scaling_of(src.cloud(), reference, ScalingOrigin::lower_corner,
@@ -349,10 +350,12 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
                              .scale();
   result.scale_m = scale_m;
   BatchRun run(src.cloud(), reference, settings, scale_m);
-  result.T_reference_source = orthonormalized(run.minimise(orthonormalized(T_init), result));
+  result.T_reference_source =
+      orthonormalized(run.minimise(frame.to_stored(orthonormalized(T_init)), result));
   detail::conclude(result, src.cloud(), reference, run.max_distance_m(),
                    EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
                    clock);
+  frame.to_clouds(result);
   return result;
 }
 

@@ -170,6 +170,9 @@ PointSurface describe(const Eigen::Vector3f& point, const std::vector<Eigen::Vec
 
 void estimate(PointCloud& cloud, const ReferenceIndex& index, const NeighborhoodSettings& settings,
               bool with_covariances) {
+  // The viewpoint is given in the cloud's frame, the points are stored from its origin.
+  NeighborhoodSettings stored = settings;
+  stored.viewpoint = (settings.viewpoint.cast<double>() - cloud.origin_m).cast<float>();
   const std::size_t n = cloud.size();
   const std::vector<Eigen::Vector3f>& points = index.cloud().points;
   std::vector<Eigen::Vector3f> normals(n);
@@ -181,7 +184,7 @@ void estimate(PointCloud& cloud, const ReferenceIndex& index, const Neighborhood
                     neighbors.reserve(k);
                     for (std::size_t i = begin; i < end; ++i) {
                       index.k_nearest(points[i], k, neighbors);
-                      const PointSurface s = describe(points[i], points, neighbors, settings);
+                      const PointSurface s = describe(points[i], points, neighbors, stored);
                       normals[i] = s.normal;
                       if (with_covariances) covariances[i] = s.covariance;
                     }
@@ -194,6 +197,7 @@ void estimate(PointCloud& cloud, const ReferenceIndex& index, const Neighborhood
 ReferenceIndex build_index(const PointCloud& cloud) {
   PointCloud points_only;
   points_only.points = cloud.points;
+  points_only.origin_m = cloud.origin_m;
   return ReferenceIndex(std::move(points_only));
 }
 
@@ -314,6 +318,7 @@ PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m) {
     ++counts[it->second];
   }
   PointCloud out;
+  out.origin_m = cloud.origin_m;
   out.points.reserve(sums.size());
   // Rounding is monotone, so the float centroid stays within its points' range: in their voxel.
   for (std::size_t v = 0; v < sums.size(); ++v) {
@@ -327,6 +332,7 @@ PointCloud random_downsample(const PointCloud& cloud, std::size_t count, std::ui
   const std::size_t n = cloud.size();
   if (count >= n) return cloud;
   PointCloud out;
+  out.origin_m = cloud.origin_m;
   out.points.reserve(count);
   if (cloud.has_normals()) out.normals.reserve(count);
   if (cloud.has_covariances()) out.covariances.reserve(count);

@@ -235,7 +235,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   const detail::Stopwatch clock;
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init);
-  const detail::PreparedSource src(source, settings.cost, settings.neighborhood,
+  const detail::PairFrame frame(reference);
+  const detail::PreparedSource src(source, frame.origin_m(), settings.cost, settings.neighborhood,
                                    settings.batch_size, "the mini-batch size");
   RegistrationResult result;
   const UnitCubeScaling scaling = detail::scaling_of(
@@ -243,12 +244,14 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   result.scale_m = scaling.scale();
   SgdRun run(src.cloud(), reference, settings, scaling);
   // Matrices read from text carry few digits: project onto the nearest rotation.
-  const PoseVector theta_init = pose_from_transform(scaling.to_scaled(orthonormalized(T_init)));
+  const PoseVector theta_init =
+      pose_from_transform(scaling.to_scaled(frame.to_stored(orthonormalized(T_init))));
   const PoseVector theta = run.minimise(theta_init, result);
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
                    EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
                    clock);
+  frame.to_clouds(result);
   return result;
 }
 

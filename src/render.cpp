@@ -334,7 +334,8 @@ void render_alignment_png(const std::filesystem::path& path, const PointCloud& r
   }
 
   // The dots to draw (strided clouds) in the reference frame, and the box of all points.
-  const RigidMap move_source(T_reference_source);
+  const RigidMap move_source(
+      between_stored(T_reference_source, source.origin_m, reference.origin_m));
   BoundingBox box;
   std::vector<Dot> dots;
   const auto collect = [&](const PointCloud& cloud, const Rgb colour, const auto& to_reference) {

@@ -35,14 +35,21 @@ class Stopwatch {
 /// here (and so timed with the registration) when it lacks them.
 class PreparedSource {
  public:
-  PreparedSource(const PointCloud& source, CostType cost, const NeighborhoodSettings& neighborhood,
-                 std::size_t min_points, const std::string& why_min)
+  /// `origin_m`: the origin of the pair's frame (PairFrame); a source stored relative to
+  /// another origin is re-based onto it (a copy, only then).
+  PreparedSource(const PointCloud& source, const Eigen::Vector3d& origin_m, CostType cost,
+                 const NeighborhoodSettings& neighborhood, std::size_t min_points,
+                 const std::string& why_min)
       : cloud_(&source) {
     check_source(source, min_points, why_min);
-    if (needs_covariances(cost) && !source.has_covariances()) {
-      with_covariances_ = source;
-      estimate_covariances(*with_covariances_, neighborhood);
-      cloud_ = &*with_covariances_;
+    if (source.origin_m != origin_m) {
+      copy_ = rebased(source, origin_m);
+      cloud_ = &*copy_;
+    }
+    if (needs_covariances(cost) && !cloud_->has_covariances()) {
+      if (!copy_) copy_ = source;
+      estimate_covariances(*copy_, neighborhood);
+      cloud_ = &*copy_;
     }
   }
   PreparedSource(const PreparedSource&) = delete;
@@ -51,8 +58,32 @@ class PreparedSource {
   [[nodiscard]] const PointCloud& cloud() const noexcept { return *cloud_; }
 
  private:
-  std::optional<PointCloud> with_covariances_;
+  std::optional<PointCloud> copy_;  // re-based, or with the covariances estimated here
   const PointCloud* cloud_;
+};
+
+/// The frame a registration runs in: the reference's stored coordinates, measured from its
+/// origin_m (zero unless georeferenced); the source is re-based onto it (PreparedSource). The
+/// transforms in and out are between the clouds' own frames.
+class PairFrame {
+ public:
+  explicit PairFrame(const ReferenceIndex& reference) : origin_m_(reference.cloud().origin_m) {}
+  [[nodiscard]] const Eigen::Vector3d& origin_m() const noexcept { return origin_m_; }
+  /// T_reference_source between the clouds' frames -> between the stored coordinates.
+  [[nodiscard]] Eigen::Matrix4d to_stored(const Eigen::Matrix4d& T) const {
+    return origin_m_.isZero() ? T : between_stored(T, origin_m_, origin_m_);
+  }
+  /// The transforms of a finished run (result and trace) back into the clouds' frames.
+  void to_clouds(RegistrationResult& result) const {
+    if (origin_m_.isZero()) return;
+    result.T_reference_source = between_frames(result.T_reference_source, origin_m_, origin_m_);
+    for (auto& entry : result.trace) {
+      entry.T_reference_source = between_frames(entry.T_reference_source, origin_m_, origin_m_);
+    }
+  }
+
+ private:
+  Eigen::Vector3d origin_m_;
 };
 
 /// Checks what every solver needs besides the source: a rigid initial transform and the

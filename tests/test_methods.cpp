@@ -23,7 +23,6 @@ namespace {
 using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
-using test::transformed;
 
 struct Method {
   std::string name;

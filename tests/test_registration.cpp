@@ -21,7 +21,6 @@ namespace {
 using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
-using test::transformed;
 
 std::filesystem::path shared(const std::string& relative) {
   return std::filesystem::path(SGDICP_SHARED_DATA) / relative;

@@ -21,7 +21,6 @@ namespace {
 using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
-using test::transformed;
 
 PointCloud with_point(PointCloud cloud, const Eigen::Vector3f& p) {
   cloud.points.insert(cloud.points.begin() + static_cast<std::ptrdiff_t>(cloud.size() / 2), p);

@@ -112,15 +112,6 @@ inline Eigen::Matrix4d make_transform(double roll, double pitch, double yaw,
   return T;
 }
 
-/// The cloud moved by T (normals and covariances rotated with it).
-inline PointCloud transformed(const PointCloud& cloud, const Eigen::Matrix4d& T) {
-  PointCloud out = cloud;
-  const Eigen::Matrix3f r = T.topLeftCorner<3, 3>().cast<float>();
-  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
-  for (auto& p : out.points) p = r * p + t;
-  for (auto& n : out.normals) n = r * n;
-  for (auto& c : out.covariances) c = r * c * r.transpose();
-  return out;
-}
+// transformed(cloud, T) is the library's (point_cloud.hpp).
 
 }  // namespace sgdicp::test

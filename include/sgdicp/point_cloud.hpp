@@ -16,6 +16,11 @@ struct PointCloud {
   std::vector<Eigen::Vector3f> points;
   std::vector<Eigen::Vector3f> normals;      ///< unit normals, or empty
   std::vector<Eigen::Matrix3f> covariances;  ///< local covariances (m^2), or empty
+  /// Where the stored points are measured from, metres, in the cloud's own frame: point k is at
+  /// origin_m + points[k]. Zero for most data; georeferenced coordinates (UTM, survey data:
+  /// millions of metres, which float would snap to a 0.25-0.5 m grid) keep their exactness by
+  /// an origin near the cloud (readers and the Python bindings pick it: georeferencing_origin).
+  Eigen::Vector3d origin_m = Eigen::Vector3d::Zero();
 
   [[nodiscard]] bool has_normals() const noexcept {
     return !points.empty() && normals.size() == points.size();
@@ -27,6 +32,25 @@ struct PointCloud {
   [[nodiscard]] std::size_t size() const noexcept { return points.size(); }
   [[nodiscard]] bool empty() const noexcept { return points.empty(); }
 };
+
+/// The origin a cloud whose first point is `point_m` gets: each coordinate rounded to the
+/// nearest kilometre, so clouds within 500 m of their frame's origin (almost every sensor frame)
+/// keep origin 0 and exactly the coordinates they had, and the stored floats of a georeferenced
+/// cloud stay within a few km of 0, where float resolves 0.5 mm or better. Nearby clouds of one
+/// survey mostly share an origin; registration re-bases the source when they do not. Coordinates
+/// beyond 1e9 m are no place on Earth: they keep origin 0 (and are then dropped as non-finite
+/// when beyond float's range).
+[[nodiscard]] inline Eigen::Vector3d georeferencing_origin(const Eigen::Vector3d& point_m) {
+  constexpr double kGrid_m = 1000.0;
+  constexpr double kLargest_m = 1e9;  // beyond any Earth-fixed coordinate: not a place, an error
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  for (Eigen::Index axis = 0; axis < 3; ++axis) {
+    if (std::abs(point_m[axis]) <= kLargest_m) {
+      origin[axis] = std::round(point_m[axis] / kGrid_m) * kGrid_m;
+    }
+  }
+  return origin;
+}
 
 /// double -> float without the undefined behaviour of converting an out-of-range value: what
 /// would round beyond FLT_MAX becomes infinite (and is then dropped or rejected as non-finite).
@@ -59,5 +83,34 @@ struct BoundingBox {
   }
   [[nodiscard]] bool valid() const { return (min.array() <= max.array()).all(); }
 };
+
+/// The same cloud stored relative to another origin (the points re-computed in double; normals
+/// and covariances do not depend on it).
+[[nodiscard]] PointCloud rebased(const PointCloud& cloud, const Eigen::Vector3d& origin_m);
+
+/// T_reference_source between the stored points of two clouds (source measured from o_s, the
+/// reference from o_r), from the one between their frames: R stays, t' = t + R o_s - o_r.
+[[nodiscard]] inline Eigen::Matrix4d between_stored(const Eigen::Matrix4d& T,
+                                                    const Eigen::Vector3d& source_origin_m,
+                                                    const Eigen::Vector3d& reference_origin_m) {
+  Eigen::Matrix4d out = T;
+  out.topRightCorner<3, 1>() += T.topLeftCorner<3, 3>() * source_origin_m - reference_origin_m;
+  return out;
+}
+
+/// Undoes between_stored: t = t' - R o_s + o_r.
+[[nodiscard]] inline Eigen::Matrix4d between_frames(const Eigen::Matrix4d& T_stored,
+                                                    const Eigen::Vector3d& source_origin_m,
+                                                    const Eigen::Vector3d& reference_origin_m) {
+  Eigen::Matrix4d out = T_stored;
+  out.topRightCorner<3, 1>() -=
+      T_stored.topLeftCorner<3, 3>() * source_origin_m - reference_origin_m;
+  return out;
+}
+
+/// The cloud moved into another frame by T (p' = R p + t, normals and covariances rotated),
+/// stored relative to that frame's `origin_m`; computed in double.
+[[nodiscard]] PointCloud transformed(const PointCloud& cloud, const Eigen::Matrix4d& T,
+                                     const Eigen::Vector3d& origin_m = Eigen::Vector3d::Zero());
 
 }  // namespace sgdicp

@@ -37,11 +37,13 @@ struct ConvertedCloud {
 [[nodiscard]] ConvertedCloud cloud_from_array(const py::handle& points, std::string_view what,
                                               NonFinite non_finite, bool allow_empty = false);
 
-/// An (N, 3) float32 array that takes over the cloud's storage (no copy).
-[[nodiscard]] py::array_t<float> array_from_cloud(PointCloud&& cloud);
+/// An (N, 3) float32 array that takes over the cloud's storage (no copy); for a georeferenced
+/// cloud (origin_m not zero) a float64 array of origin + point, which float32 cannot hold.
+[[nodiscard]] py::array array_from_cloud(PointCloud&& cloud);
 
-/// A read-only (N, 3) float32 view of a cloud owned by `owner`, which the view keeps alive.
-[[nodiscard]] py::array_t<float> readonly_view(const PointCloud& cloud, const py::handle& owner);
+/// A read-only (N, 3) float32 view of a cloud owned by `owner`, which the view keeps alive (a
+/// georeferenced cloud: a read-only float64 copy, as array_from_cloud).
+[[nodiscard]] py::array readonly_view(const PointCloud& cloud, const py::handle& owner);
 
 /// A (4, 4) array-like as a matrix; throws InvalidInputError naming `what` for another shape or
 /// a non-numeric content.

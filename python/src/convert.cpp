@@ -5,6 +5,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "bindings.hpp"
@@ -39,20 +40,33 @@ bool native_byte_order(const py::dtype& dtype) {
 // Reads element by element through the strides with memcpy, which is valid for any layout and
 // alignment and compiles to plain loads.
 template <typename T>
+Eigen::Matrix<T, 3, 1> row_at(const py::array& a, py::ssize_t i) {
+  const char* row = static_cast<const char*>(a.data()) + i * a.strides(0);
+  Eigen::Matrix<T, 3, 1> p;
+  for (int j = 0; j < 3; ++j) std::memcpy(&p[j], row + j * a.strides(1), sizeof(T));
+  return p;
+}
+
+// float64 rows may be georeferenced (UTM, survey data): stored from the origin their first finite
+// row gives (zero for a cloud near its frame's origin), as the file readers do.
+Eigen::Vector3d origin_of_rows(const py::array& a) {
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+    const Eigen::Vector3d p = row_at<double>(a, i);
+    if (p.allFinite()) return georeferencing_origin(p);
+  }
+  return Eigen::Vector3d::Zero();
+}
+
+template <typename T>
 void copy_rows(const py::array& a, NonFinite non_finite, ConvertedCloud& out) {
-  const auto* base = static_cast<const char*>(a.data());
   const py::ssize_t rows = a.shape(0);
-  const py::ssize_t row_stride = a.strides(0);
-  const py::ssize_t column_stride = a.strides(1);
   out.cloud.points.reserve(static_cast<std::size_t>(rows));
+  if constexpr (std::is_same_v<T, double>) out.cloud.origin_m = origin_of_rows(a);
+  const Eigen::Matrix<T, 3, 1> origin = out.cloud.origin_m.cast<T>();
   for (py::ssize_t i = 0; i < rows; ++i) {
-    const char* row = base + i * row_stride;
+    const Eigen::Matrix<T, 3, 1> row = row_at<T>(a, i);
     Eigen::Vector3f p;
-    for (int j = 0; j < 3; ++j) {
-      T value;
-      std::memcpy(&value, row + j * column_stride, sizeof(T));
-      p[j] = to_float(value);
-    }
+    for (int j = 0; j < 3; ++j) p[j] = to_float(static_cast<T>(row[j] - origin[j]));
     if (non_finite == NonFinite::drop && !p.allFinite()) {
       ++out.non_finite_dropped;
       continue;
@@ -109,7 +123,19 @@ ConvertedCloud cloud_from_array(const py::handle& points, std::string_view what,
   return out;
 }
 
-py::array_t<float> array_from_cloud(PointCloud&& cloud) {
+// origin + point in double, for a cloud whose points are stored from a non-zero origin.
+py::array_t<double> absolute_points(const PointCloud& cloud) {
+  py::array_t<double> out({static_cast<py::ssize_t>(cloud.size()), py::ssize_t{3}});
+  auto rows = out.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d p = cloud.points[i].cast<double>() + cloud.origin_m;
+    for (int j = 0; j < 3; ++j) rows(static_cast<py::ssize_t>(i), j) = p[j];
+  }
+  return out;
+}
+
+py::array array_from_cloud(PointCloud&& cloud) {
+  if (!cloud.origin_m.isZero()) return absolute_points(cloud);
   static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "Vector3f must be packed");
   using Storage = std::vector<Eigen::Vector3f>;
   auto storage = std::make_unique<Storage>(std::move(cloud.points));
@@ -122,7 +148,12 @@ py::array_t<float> array_from_cloud(PointCloud&& cloud) {
   return py::array_t<float>(shape, data, owner);
 }
 
-py::array_t<float> readonly_view(const PointCloud& cloud, const py::handle& owner) {
+py::array readonly_view(const PointCloud& cloud, const py::handle& owner) {
+  if (!cloud.origin_m.isZero()) {
+    py::array copy = absolute_points(cloud);
+    copy.attr("setflags")(py::arg("write") = false);
+    return copy;
+  }
   const auto rows = static_cast<py::ssize_t>(cloud.size());
   const std::vector<py::ssize_t> shape{rows, 3};
   if (rows == 0) return py::array_t<float>(shape);

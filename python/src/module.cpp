@@ -314,7 +314,7 @@ Encoding encoding_from_object(const py::handle& value) {
 }
 
 struct ReadPoints {
-  py::array_t<float> points;
+  py::array points;  // float32, or float64 for a georeferenced cloud
   std::size_t points_in_file = 0;
   std::size_t non_finite_dropped = 0;
   std::string format;
