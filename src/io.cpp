@@ -248,18 +248,49 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
+std::string limit_text(std::uint64_t bytes) {
+  return std::to_string(bytes) + " bytes = " + std::to_string(bytes >> 30) + " GiB";
+}
+
+// Only regular files: a device or FIFO has no size to check, and /dev/zero never ends.
+void check_regular_file(const fs::path& path, const std::string& name) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || status.type() == fs::file_type::regular) return;  // missing: fopen says why
+  if (status.type() == fs::file_type::directory) {
+    throw IoError(name + ": cannot open: " + system_message(EISDIR));
+  }
+  const char* kind = status.type() == fs::file_type::character ? "a character device"
+                     : status.type() == fs::file_type::block   ? "a block device"
+                     : status.type() == fs::file_type::fifo    ? "a FIFO"
+                     : status.type() == fs::file_type::socket  ? "a socket"
+                                                               : "not a regular file";
+  throw IoError(name + ": " + kind +
+                " (only regular files are read, so that their size bounds what is read)");
+}
+
 std::vector<char> read_whole_file(const fs::path& path, const std::string& name) {
+  check_regular_file(path, name);
   errno = 0;
   const FilePtr file(std::fopen(path.string().c_str(), "rb"));
   if (!file) throw IoError(name + ": cannot open: " + system_message(errno));
   std::error_code size_error;
   const auto expected = fs::file_size(path, size_error);
-  // One byte more than expected so that the end of file is seen by the first read.
-  std::vector<char> bytes(size_error ? std::size_t{1} << 16
-                                     : static_cast<std::size_t>(expected) + 1);
+  if (size_error) throw IoError(name + ": cannot read the size: " + size_error.message());
+  const auto too_large = [&]() {
+    return IoError(name + ": larger than the largest file read (" + limit_text(kMaxFileBytes) +
+                   ")");
+  };
+  if (expected > kMaxFileBytes) throw too_large();
+  // One byte more than expected so that the end of file is seen by the first read; a file that
+  // grows while it is read is still bounded by kMaxFileBytes.
+  std::vector<char> bytes(static_cast<std::size_t>(expected) + 1);
   std::size_t used = 0;
   for (;;) {
-    if (used == bytes.size()) bytes.resize(bytes.size() * 2);
+    if (used == bytes.size()) {
+      if (used > kMaxFileBytes) throw too_large();
+      bytes.resize(std::min<std::size_t>(bytes.size() * 2, kMaxFileBytes + 1));
+    }
     errno = 0;
     const std::size_t got = std::fread(bytes.data() + used, 1, bytes.size() - used, file.get());
     used += got;
@@ -294,9 +325,13 @@ void write_whole_file(const fs::path& path, const std::string& name, std::string
 // converted to the float storage and non-finite points are dropped and counted.
 class PointSink {
  public:
-  explicit PointSink(ReadResult& result) : result_(result) {}
+  PointSink(const std::string& name, ReadResult& result) : name_(name), result_(result) {}
 
   void add(double x, double y, double z) {
+    if (++seen_ > kMaxCloudPoints) {
+      throw FormatError(name_ + ": more than the largest cloud read (" +
+                        std::to_string(kMaxCloudPoints) + " points)");
+    }
     // Beyond the float range counts as non-finite too: storage cannot hold it.
     const float xf = to_float_saturating(x);
     const float yf = to_float_saturating(y);
@@ -317,8 +352,20 @@ class PointSink {
   [[nodiscard]] ReadResult& result() { return result_; }
 
  private:
+  const std::string& name_;
   ReadResult& result_;
+  std::uint64_t seen_ = 0;
 };
+
+// A declared point count beyond the largest cloud: the message names the count and the limit.
+bool beyond_cloud_limit(std::uint64_t points) {
+  return points > kMaxCloudPoints;
+}
+
+std::string cloud_limit_text(std::uint64_t points) {
+  return std::to_string(points) + " points exceed the largest cloud read (" +
+         std::to_string(kMaxCloudPoints) + " points)";
+}
 
 // Smallest text for one point: "0 0 0\n".
 constexpr std::size_t kMinTextPointBytes = 6;
@@ -507,6 +554,10 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
               "POINTS " + std::to_string(header.points) + " does not match WIDTH x HEIGHT = " +
                   std::to_string(header.width) + " x " + std::to_string(header.height));
   }
+  if (beyond_cloud_limit(header.points)) {
+    fail_line(name, have_points ? header.points_line : header.data_line,
+              cloud_limit_text(header.points));
+  }
   return header;
 }
 
@@ -618,10 +669,42 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
   }
 }
 
+// Size of the output of an LZF block, found by walking its control bytes without writing
+// anything, so that a lying or corrupt block is rejected before its output is allocated.
+// nullopt when the block is corrupt: a run or reference cut off by the end, or a back reference
+// to before the start of the output. Format: a control byte c < 32 starts a run of c + 1 literal
+// bytes; otherwise it is a back reference of length (c >> 5) + 2 (a second byte extends length
+// 7), its offset ((c & 31) << 8) + the next byte + 1.
+std::optional<std::uint64_t> lzf_output_size(std::string_view block) {
+  std::uint64_t out = 0;
+  std::size_t in = 0;
+  while (in < block.size()) {
+    const auto control = static_cast<unsigned char>(block[in++]);
+    if (control < 32) {
+      const std::size_t run = control + 1u;
+      if (run > block.size() - in) return std::nullopt;
+      in += run;
+      out += run;
+      continue;
+    }
+    std::uint64_t length = control >> 5;
+    if (length == 7) {
+      if (in >= block.size()) return std::nullopt;
+      length += static_cast<unsigned char>(block[in++]);
+    }
+    if (in >= block.size()) return std::nullopt;
+    const std::uint64_t offset =
+        ((std::uint64_t{control} & 31u) << 8) + static_cast<unsigned char>(block[in++]) + 1;
+    if (offset > out) return std::nullopt;
+    out += length + 2;
+  }
+  return out;
+}
+
 void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::string_view data,
                          PointSink& sink) {
-  // LZF emits at most 264 bytes per 3-byte back reference; a larger claimed ratio is a lie.
-  constexpr std::uint64_t kMaxLzfRatio = 100;
+  // The most LZF can expand: a 3-byte back reference emits at most 264 bytes.
+  constexpr std::uint64_t kMaxLzfRatio = 264 / 3;
   const PcdLayout layout = pcd_layout(name, header);
   const std::size_t start = header.data_offset;
   const std::size_t available = data.size() - start;
@@ -647,6 +730,13 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
     fail_byte(name, start + 4,
               "uncompressed size " + std::to_string(uncompressed) + " is impossible for " +
                   std::to_string(compressed) + " bytes of LZF data");
+  }
+  const std::string_view block = data.substr(start + 8, compressed);
+  if (const auto decoded = lzf_output_size(block); decoded != uncompressed) {
+    fail_byte(name, start + 8,
+              !decoded ? "corrupt LZF data"
+                       : "LZF data decompress to " + std::to_string(*decoded) +
+                             " bytes, expected " + std::to_string(uncompressed));
   }
   std::vector<char> raw(uncompressed);
   const unsigned int got =
@@ -875,6 +965,9 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
       fail_line(name, vertex->line, "vertex property '" + found->name + "' is a list");
     header.xyz[axis] = static_cast<std::size_t>(found - props.begin());
   }
+  if (beyond_cloud_limit(vertex->count)) {
+    fail_line(name, vertex->line, "element vertex: " + cloud_limit_text(vertex->count));
+  }
   return header;
 }
 
@@ -1036,6 +1129,7 @@ void read_float_records(const std::string& name, std::string_view data, std::siz
                   " bytes is not a multiple of " + std::to_string(record) + " (" + layout + ")");
   }
   const std::size_t n = data.size() / record;
+  if (beyond_cloud_limit(n)) fail_byte(name, 0, cloud_limit_text(n));
   sink.result().points_in_file = n;
   sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -1188,6 +1282,7 @@ void read_vtk(const std::string& name, std::string_view data, PointSink& sink) {
     fail_line(name, cursor.line(), "unsupported POINTS type " + shown(type) + " (float or double)");
   }
 
+  if (beyond_cloud_limit(count)) fail_line(name, cursor.line(), cloud_limit_text(count));
   sink.result().points_in_file = static_cast<std::size_t>(count);
   sink.reserve(count, cursor.remaining() / kMinTextPointBytes);
   for (std::uint64_t i = 0; i < count; ++i) {
@@ -1271,7 +1366,7 @@ ReadResult parse_point_cloud(const std::string& name, std::string_view data, Fil
   if (data.empty()) fail_byte(name, 0, "empty file");
   ReadResult result;
   result.format = format;
-  PointSink sink(result);
+  PointSink sink(name, result);
   switch (format) {
     case FileFormat::pcd:
       read_pcd(name, data, sink);
@@ -1343,6 +1438,10 @@ ReadResult read_point_cloud(const std::filesystem::path& path, FileFormat format
 
 ReadResult read_point_cloud_from_memory(std::span<const std::byte> bytes, FileFormat format,
                                         std::string_view name) {
+  if (bytes.size() > kMaxFileBytes) {
+    throw FormatError(std::string(name) + ": larger than the largest file read (" +
+                      limit_text(kMaxFileBytes) + ")");
+  }
   if (format == FileFormat::automatic) {
     throw FormatError(std::string(name) +
                       ": reading from memory needs an explicit format (no extension to go by)");

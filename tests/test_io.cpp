@@ -15,6 +15,7 @@
 #include <initializer_list>
 #include <iterator>
 #include <limits>
+#include <new>
 #include <ostream>
 #include <random>
 #include <span>
@@ -24,8 +25,11 @@
 #include <utility>
 #include <vector>
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
+#include "allocation_tracker.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/io.hpp"
 
@@ -691,33 +695,33 @@ TEST_F(IoTest, RejectsPcdHeaderErrors) {
 }
 
 TEST_F(IoTest, RejectsHeadersLyingAboutThePointCount) {
-  // Each would need gigabytes; each must fail on the bounds check, not on an allocation.
+  // Each would need gigabytes (within the largest cloud read); each must fail on the bounds
+  // check, not on an allocation.
   const std::string pcd =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      "WIDTH 4000000000\nHEIGHT 1\nPOINTS 4000000000\nDATA binary\n";
-  expect_error<FormatError>(
-      write("lie.pcd", pcd + std::string(1000, '\x01')),
-      {"byte " + std::to_string(pcd.size()), "need 48000000000", "have 1000"});
+      "WIDTH 200000000\nHEIGHT 1\nPOINTS 200000000\nDATA binary\n";
+  expect_error<FormatError>(write("lie.pcd", pcd + std::string(1000, '\x01')),
+                            {"byte " + std::to_string(pcd.size()), "need 2400000000", "have 1000"});
 
   const std::string ascii =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      "WIDTH 4000000000\nHEIGHT 1\nPOINTS 4000000000\nDATA ascii\n";
+      "WIDTH 200000000\nHEIGHT 1\nPOINTS 200000000\nDATA ascii\n";
   expect_error<FormatError>(write("lie_ascii.pcd", ascii + "1 2 3\n"),
-                            {"line 10", "expected 4000000000 points"});
+                            {"line 10", "expected 200000000 points"});
 
   const std::string compressed =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      "WIDTH 300000000\nHEIGHT 1\nPOINTS 300000000\nDATA binary_compressed\n";
+      "WIDTH 250000000\nHEIGHT 1\nPOINTS 250000000\nDATA binary_compressed\n";
   Bytes c;
   c.text(compressed)
       .le(std::uint32_t{100})
-      .le(std::uint32_t{3600000000u})
+      .le(std::uint32_t{3000000000u})
       .text(std::string(100, 'a'));
   expect_error<FormatError>(write("lie_compressed.pcd", c.str()),
                             {"byte " + std::to_string(compressed.size() + 4), "impossible"});
 
   const std::string ply =
-      "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+      "ply\nformat binary_little_endian 1.0\nelement vertex 200000000\n"
       "property float x\nproperty float y\nproperty float z\nend_header\n";
   expect_error<FormatError>(write("lie.ply", ply + std::string(1000, '\x01')),
                             {"byte " + std::to_string(ply.size())});
@@ -733,8 +737,103 @@ TEST_F(IoTest, RejectsHeadersLyingAboutThePointCount) {
 
   expect_error<FormatError>(write("lie.vtk",
                                   "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\n"
-                                  "POINTS 4000000000 float\n1 2 3\n"),
-                            {"line 6", "4000000000 points"});
+                                  "POINTS 200000000 float\n1 2 3\n"),
+                            {"line 6", "200000000 points"});
+}
+
+// A 4 MB block of garbage whose header claims 88 x its size (the most LZF can expand), as in
+// issue 11: rejected by walking the block, before the 350 MB output is allocated.
+std::string hostile_compressed_pcd(std::uint64_t points) {
+  std::mt19937 rng(7);
+  std::string garbage(4'000'000, '\0');
+  for (char& c : garbage) c = static_cast<char>(rng());
+  garbage[0] = '\x1f';  // a literal run first, so that decompressing would get going
+  const std::string header =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " +
+      std::to_string(points) + "\nHEIGHT 1\nDATA binary_compressed\n";
+  Bytes b;
+  b.text(header)
+      .le(static_cast<std::uint32_t>(garbage.size()))
+      .le(static_cast<std::uint32_t>(points * 12))
+      .text(garbage);
+  return b.str();
+}
+
+TEST_F(IoTest, GarbageCompressedPcdFailsWithoutAllocatingItsClaim) {
+  const std::uint64_t points = 4'000'000 * 88 / 12;  // 352 MB claimed
+  const std::string pcd = hostile_compressed_pcd(points);
+  const auto* data = reinterpret_cast<const std::byte*>(pcd.data());
+  reset_largest_allocation();
+  EXPECT_THROW((void)read_point_cloud_from_memory({data, pcd.size()}, FileFormat::pcd),
+               FormatError);
+  EXPECT_LT(largest_allocation(), std::size_t{1} << 20);
+
+  const fs::path path = write("hostile.pcd", pcd);
+  reset_largest_allocation();
+  expect_error<FormatError>(path, {"corrupt LZF data"});
+  EXPECT_LT(largest_allocation(), pcd.size() + (std::size_t{1} << 20));  // the file copy
+
+  // Claims beyond what LZF can produce from 4 MB fail on the header alone.
+  reset_largest_allocation();
+  expect_error<FormatError>(write("claim.pcd", hostile_compressed_pcd(std::uint64_t{1} << 28)),
+                            {"3221225472", "impossible for 4000000 bytes"});
+  EXPECT_LT(largest_allocation(), pcd.size() + (std::size_t{1} << 20));
+}
+
+TEST_F(IoTest, LzfBlockDecodingToAnotherSizeIsRejectedBeforeDecompressing) {
+  Bytes raw;
+  std::mt19937 rng(3);
+  for (int i = 0; i < 3000; ++i) raw.le(static_cast<float>(rng() % 1000));
+  const std::string block = lzf_block(raw.str());
+  // The header claims twice the points: still within 88 x, but the block says otherwise.
+  const std::string header =
+      pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 2000, 1, "binary_compressed");
+  Bytes b;
+  b.text(header).le(static_cast<std::uint32_t>(block.size())).le(std::uint32_t{24000});
+  b.text(block);
+  reset_largest_allocation();
+  expect_error<FormatError>(write("short.pcd", b.str()), {"decompress to 12000 bytes", "24000"});
+  EXPECT_LT(largest_allocation(), 20000u);
+}
+
+TEST_F(IoTest, CloudsBeyondTheLargestAreRejectedNamingTheLimit) {
+  const std::string limit = std::to_string(kMaxCloudPoints);
+  EXPECT_EQ(limit, "268435456");
+  const std::string pcd =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+      "WIDTH 4000000000\nHEIGHT 1\nPOINTS 4000000000\nDATA binary\n";
+  expect_error<FormatError>(write("big.pcd", pcd + std::string(1000, '\x01')),
+                            {"line 8", "4000000000 points exceed", limit});
+  const std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 268435457\n"
+      "property float x\nproperty float y\nproperty float z\nend_header\n";
+  expect_error<FormatError>(write("big.ply", ply + std::string(1000, '\x01')),
+                            {"line 3", "268435457 points exceed", limit});
+  // The real count, not one wrapped by a multiplication.
+  expect_error<FormatError>(write("big.vtk",
+                                  "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\n"
+                                  "POINTS 18446744073709551615 float\n1 2 3\n"),
+                            {"line 5", "18446744073709551615 points exceed", limit});
+}
+
+TEST_F(IoTest, NonRegularFilesAreRejectedWithAMessage) {
+  if (!fs::exists("/dev/zero")) GTEST_SKIP() << "no /dev/zero";
+  const fs::path zero = dir_ / "zero.bin";
+  fs::create_symlink("/dev/zero", zero);
+  expect_error<IoError>(zero, {"a character device", "only regular files"});
+  const fs::path fifo = dir_ / "fifo.xyz";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error<IoError>(fifo, {"a FIFO"});  // and does not block waiting for a writer
+}
+
+TEST_F(IoTest, FilesBeyondTheLargestAreRejectedBeforeReading) {
+  const fs::path path = write("huge.f32", "");
+  std::error_code ec;
+  fs::resize_file(path, kMaxFileBytes + 12, ec);  // sparse: no disk space used
+  if (ec) GTEST_SKIP() << "cannot make a sparse file: " << ec.message();
+  reset_largest_allocation();
+  expect_error<IoError>(path, {"larger than the largest file read", "17179869184 bytes = 16 GiB"});
+  EXPECT_LT(largest_allocation(), std::size_t{1} << 20);
 }
 
 TEST_F(IoTest, RejectsPlyWithoutVertexElement) {
