@@ -6,6 +6,7 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <clocale>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -1257,6 +1258,101 @@ TEST(IoMemory, NeedsAnExplicitFormatAndNamesTheSource) {
     EXPECT_TRUE(std::string(e.what()).starts_with("fuzz input: line 2:")) << e.what();
   }
   EXPECT_THROW((void)read_point_cloud_from_memory({}, FileFormat::pcd), FormatError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Numbers in text formats
+
+ReadResult read_text(const std::string& text, FileFormat format = FileFormat::xyz) {
+  const auto* data = reinterpret_cast<const std::byte*>(text.data());
+  return read_point_cloud_from_memory({data, text.size()}, format, "numbers");
+}
+
+std::string text_error(const std::string& text, FileFormat format = FileFormat::xyz) {
+  try {
+    (void)read_text(text, format);
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(IoNumbers, OverflowIsInfiniteAndDroppedUnderflowIsZero) {
+  const std::string overflow = "1" + std::string(400, '0') + "e-1";     // 1e399
+  const std::string underflow = "0." + std::string(400, '0') + "1e+1";  // 1e-400
+  const ReadResult r = read_text("1 2 " + overflow + "\n" + underflow + " -" + underflow +
+                                 " -1e-400\n-" + overflow + " 0 0\n");
+  EXPECT_EQ(r.points_in_file, 3u);
+  EXPECT_EQ(r.non_finite_dropped, 2u);
+  ASSERT_EQ(r.cloud.size(), 1u);
+  EXPECT_EQ(r.cloud.points[0], Eigen::Vector3f::Zero());
+  EXPECT_FALSE(std::signbit(r.cloud.points[0].x()));
+  EXPECT_TRUE(std::signbit(r.cloud.points[0].y()));
+  EXPECT_TRUE(std::signbit(r.cloud.points[0].z()));
+  // Exponents beyond any integer type saturate the same way.
+  EXPECT_EQ(read_text("1e99999999999999999999999 0 0\n").non_finite_dropped, 1u);
+  EXPECT_EQ(read_text("1e-99999999999999999999999 0 0\n").cloud.size(), 1u);
+}
+
+TEST(IoNumbers, EdgesOfTheFloatStorageAndLongMantissas) {
+  constexpr float kMax = std::numeric_limits<float>::max();
+  constexpr float kDenorm = std::numeric_limits<float>::denorm_min();
+  const ReadResult r = read_text("3.4028234663852886e38 1.4e-45 1e-310\n3.5e38 0 0\n");
+  EXPECT_EQ(r.non_finite_dropped, 1u);  // beyond the float range: infinite
+  ASSERT_EQ(r.cloud.size(), 1u);
+  EXPECT_EQ(r.cloud.points[0].x(), kMax);
+  EXPECT_EQ(r.cloud.points[0].y(), kDenorm);
+  EXPECT_EQ(r.cloud.points[0].z(), 0.0f);  // a double subnormal, below the float ones
+  // 500 digits: correctly rounded, not cut off.
+  const std::string long_one = "0." + std::string(500, '9');  // 1 - 1e-500
+  const std::string long_tenth = "0.1" + std::string(500, '0') + "1";
+  const ReadResult l =
+      read_text(long_one + " " + long_tenth + " 1" + std::string(300, '0') + "e-300\n");
+  ASSERT_EQ(l.cloud.size(), 1u);
+  EXPECT_EQ(l.cloud.points[0].x(), 1.0f);
+  EXPECT_EQ(l.cloud.points[0].y(), 0.1f);
+  EXPECT_EQ(l.cloud.points[0].z(), 1.0f);
+}
+
+TEST(IoNumbers, StrictTokensInEveryTextFormat) {
+  EXPECT_EQ(read_text("+1 +2.5 -3\n").cloud.points[0], Eigen::Vector3f(1, 2.5f, -3));
+  for (const std::string bad :
+       {"0.0.5", "+-1", "++1", "1e", "1e+", ".", "-", "0x1p3", "1.5f", "1_000"}) {
+    SCOPED_TRACE(bad);
+    const std::string xyz = text_error("1 2 3\n0 " + bad + " 0\n");
+    EXPECT_NE(xyz.find("numbers: line 2: '" + bad + "' is not a number"), std::string::npos) << xyz;
+    const std::string pcd = text_error(
+        pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii") + "0 0 " + bad + "\n",
+        FileFormat::pcd);
+    EXPECT_NE(pcd.find("is not a number"), std::string::npos) << pcd;
+    const std::string ply = text_error(
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n" +
+            bad + " 0 0\n",
+        FileFormat::ply);
+    EXPECT_NE(ply.find("is not a number"), std::string::npos) << ply;
+    const std::string vtk = text_error(
+        "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 " + bad + " 0\n",
+        FileFormat::vtk);
+    EXPECT_NE(vtk.find("is not a number"), std::string::npos) << vtk;
+  }
+}
+
+TEST(IoNumbers, DecimalPointIgnoresTheLocale) {
+  const char* previous = std::setlocale(LC_ALL, nullptr);
+  const std::string saved = previous != nullptr ? previous : "C";
+  bool comma_locale = false;
+  for (const char* name : {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "ru_RU.UTF-8"}) {
+    if (std::setlocale(LC_ALL, name) != nullptr) {
+      comma_locale = true;
+      break;
+    }
+  }
+  if (!comma_locale) GTEST_SKIP() << "no locale with a decimal comma installed";
+  const ReadResult r = read_text("1.5 2.25 -3.125\n");
+  std::setlocale(LC_ALL, saved.c_str());
+  ASSERT_EQ(r.cloud.size(), 1u);
+  EXPECT_EQ(r.cloud.points[0], Eigen::Vector3f(1.5f, 2.25f, -3.125f));
 }
 
 }  // namespace
