@@ -138,6 +138,27 @@ bool parse_uint(std::string_view token, std::uint64_t& out) {
   return !token.empty() && error == std::errc() && end == last;
 }
 
+// Whether a token is an integer (one optional sign) that fits `bytes` bytes, signed or not:
+// the text of an integer field, where "banana", "1.5" or "300" for a uchar are errors.
+bool is_integer_token(std::string_view token, std::size_t bytes, bool is_signed) {
+  if (token.starts_with('+')) token.remove_prefix(1);
+  if (token.empty() || token.front() == '+') return false;
+  const char* const last = token.data() + token.size();
+  const unsigned bits = static_cast<unsigned>(bytes * 8);
+  if (is_signed) {
+    std::int64_t v = 0;
+    const auto [end, error] = std::from_chars(token.data(), last, v);
+    if (error != std::errc() || end != last) return false;
+    const std::int64_t max =
+        bits >= 64 ? std::numeric_limits<std::int64_t>::max() : (std::int64_t{1} << (bits - 1)) - 1;
+    return v <= max && v >= -max - 1;
+  }
+  std::uint64_t v = 0;
+  const auto [end, error] = std::from_chars(token.data(), last, v);
+  if (error != std::errc() || end != last) return false;
+  return bits >= 64 || v <= (std::uint64_t{1} << bits) - 1;
+}
+
 // Walks text by lines or by whitespace-separated tokens and keeps the line number for messages.
 class TextCursor {
  public:
@@ -504,6 +525,31 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
   return header;
 }
 
+// Every value of a data line is of its field's type: a number for F, an integer that fits SIZE
+// bytes for I and U. The line has as many values as the fields' COUNTs add up to.
+void check_pcd_values(const std::string& name, std::size_t line_number, const PcdHeader& header,
+                      std::string_view line) {
+  std::size_t field = 0;
+  std::uint64_t left = header.fields.empty() ? 0 : header.fields[0].count;
+  for (const std::string_view token : split_whitespace(line)) {
+    while (left == 0) left = header.fields[++field].count;
+    const PcdField& f = header.fields[field];
+    double ignored = 0.0;
+    const bool ok = f.type == 'F' ? parse_number(token, ignored)
+                                  : is_integer_token(token, f.size, f.type == 'I');
+    if (!ok) {
+      fail_line(name, line_number,
+                shown(token) + " is not " +
+                    (f.type == 'F'
+                         ? std::string("a number")
+                         : (f.type == 'I' ? "a signed" : "an unsigned") +
+                               std::string(" integer of ") + std::to_string(f.size) + " byte(s)") +
+                    " (field '" + f.name + "')");
+    }
+    --left;
+  }
+}
+
 void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor& cursor,
                     PointSink& sink) {
   // Column of x, y and z on a line, where fields with COUNT > 1 take several columns.
@@ -545,6 +591,7 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
       fail_line(name, cursor.line(),
                 "expected " + std::to_string(columns) + " values, got " + std::to_string(count));
     }
+    check_pcd_values(name, cursor.line(), header, line);
     std::array<double, 3> p{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       if (!parse_number(xyz[axis], p[axis])) {
@@ -584,6 +631,20 @@ PcdLayout pcd_layout(const std::string& name, const PcdHeader& header) {
   return layout;
 }
 
+// The bytes after binary point data must be none, or zeros that fill a page: PCL before 1.10
+// stretched its files to a page (4096 bytes, up to 64 KiB on some systems) plus the data.
+void check_pcd_end(const std::string& name, std::string_view data, std::size_t end) {
+  constexpr std::size_t kLargestPage = std::size_t{1} << 16;
+  const std::string_view rest = data.substr(end);
+  const bool page_padding =
+      rest.size() < kLargestPage && rest.find_first_not_of('\0') == std::string_view::npos;
+  if (!page_padding) {
+    fail_byte(name, end,
+              std::to_string(rest.size()) +
+                  " bytes after the point data (only zeros that fill a page may follow)");
+  }
+}
+
 void read_pcd_binary(const std::string& name, const PcdHeader& header, std::string_view data,
                      PointSink& sink) {
   const PcdLayout layout = pcd_layout(name, header);
@@ -594,6 +655,7 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
               "truncated binary data (need " + byte_count_text(need) +
                   " bytes of point data, have " + std::to_string(available) + ")");
   }
+  check_pcd_end(name, data, header.data_offset + static_cast<std::size_t>(*need));
   const char* const base = data.data() + header.data_offset;
   const std::size_t step = static_cast<std::size_t>(layout.point_size);
   std::array<std::size_t, 3> offset{};
@@ -668,6 +730,7 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
               "truncated compressed data (need " + std::to_string(compressed) + " bytes, have " +
                   std::to_string(available - 8) + ")");
   }
+  check_pcd_end(name, data, start + 8 + compressed);
   if (uncompressed == 0) return;
   if (uncompressed > std::uint64_t{compressed} * kMaxLzfRatio) {
     fail_byte(name, start + 4,
@@ -753,6 +816,15 @@ std::optional<PlyType> ply_type(std::string_view name) {
     if (text == name) return type;
   }
   return std::nullopt;
+}
+
+// The PLY name of a type, from the table above (its first spelling).
+std::string ply_type_name(PlyType type) {
+  for (const std::string_view name :
+       {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"}) {
+    if (ply_type(name) == type) return std::string(name);
+  }
+  return "value";
 }
 
 std::size_t ply_size(PlyType type) {
@@ -914,6 +986,15 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
   return header;
 }
 
+// Whether a token is a value of a PLY type: a number for float and double, an integer that
+// fits the type for the others.
+bool is_ply_value(PlyType type, std::string_view token) {
+  double ignored = 0.0;
+  if (type == PlyType::f32 || type == PlyType::f64) return parse_number(token, ignored);
+  const bool is_signed = type == PlyType::i8 || type == PlyType::i16 || type == PlyType::i32;
+  return is_integer_token(token, ply_size(type), is_signed);
+}
+
 void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor& cursor,
                     PointSink& sink) {
   std::string_view token;
@@ -935,14 +1016,29 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
       for (std::size_t k = 0; k < element.properties.size(); ++k) {
         const PlyProperty& property = element.properties[k];
         const std::string_view value = next();
+        const auto check = [&](PlyType type, std::string_view text) {
+          if (!is_ply_value(type, text)) {
+            fail_line(name, cursor.line(),
+                      shown(text) + " is not " +
+                          (type == PlyType::f32 || type == PlyType::f64
+                               ? std::string("a number")
+                               : "a " + ply_type_name(type) + " value") +
+                          " (property '" + property.name + "')");
+          }
+        };
         if (property.is_list) {
           std::uint64_t length = 0;
-          if (!parse_uint(value, length)) {
+          if (!parse_uint(value, length) || !is_ply_value(property.count_type, value)) {
             fail_line(name, cursor.line(),
-                      shown(value) + " is not a list length (property '" + property.name + "')");
+                      shown(value) + " is not a list length of type " +
+                          ply_type_name(property.count_type) + " (property '" + property.name +
+                          "')");
           }
-          for (std::uint64_t i = 0; i < length; ++i) next();
-        } else if (is_vertex) {
+          for (std::uint64_t i = 0; i < length; ++i) check(property.type, next());
+          continue;
+        }
+        check(property.type, value);
+        if (is_vertex) {
           for (std::size_t axis = 0; axis < 3; ++axis) {
             if (header.xyz[axis] == k && !parse_number(value, p[axis])) {
               fail_line(name, cursor.line(),
@@ -1046,6 +1142,11 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
                  ply_value(xyz_type[2], data.data() + xyz_offset[2], big_endian));
       }
     }
+  }
+  if (pos != data.size()) {
+    fail_byte(name, pos,
+              std::to_string(data.size() - pos) +
+                  " bytes after the last element (binary PLY ends with its data)");
   }
 }
 

@@ -1355,5 +1355,92 @@ TEST(IoNumbers, DecimalPointIgnoresTheLocale) {
   EXPECT_EQ(r.cloud.points[0], Eigen::Vector3f(1.5f, 2.25f, -3.125f));
 }
 
+// ---------------------------------------------------------------------------------------------
+// Strictness: every value of its type, nothing after binary data
+
+TEST(IoStrict, PlyAsciiValuesOfEveryPropertyHaveTheirType) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nproperty uchar red\nproperty char dx\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  EXPECT_EQ(read_text(header + "1 2 3 255 -128\n1 0\n", FileFormat::ply).cloud.size(), 1u);
+  const std::pair<std::string, std::string> cases[] = {
+      {"1 2 3 banana 0\n1 0\n", "line 12: 'banana' is not a uchar value (property 'red')"},
+      {"1 2 3 256 0\n1 0\n", "'256' is not a uchar value (property 'red')"},
+      {"1 2 3 -1 0\n1 0\n", "'-1' is not a uchar value"},
+      {"1 2 3 1.5 0\n1 0\n", "'1.5' is not a uchar value"},
+      {"1 2 3 0 -129\n1 0\n", "'-129' is not a char value (property 'dx')"},
+      {"1 2 3 0 0\nbanana 0\n", "line 13: 'banana' is not a list length of type uchar"},
+      {"1 2 3 0 0\n256 0\n", "'256' is not a list length of type uchar"},
+      {"1 2 3 0 0\n1 banana\n", "'banana' is not a int value (property 'vertex_indices')"},
+  };
+  for (const auto& [body, message] : cases) {
+    SCOPED_TRACE(body);
+    const std::string error = text_error(header + body, FileFormat::ply);
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
+TEST(IoStrict, PcdAsciiValuesOfEveryFieldHaveTheirType) {
+  const std::string header = pcd_header("x y z rgb label normal", "4 4 4 4 1 4", "F F F U I F",
+                                        "1 1 1 1 1 3", 1, 1, "ascii");
+  const ReadResult ok = read_text(header + "1 2 3 4294967295 -128 nan 0 1e-3\n", FileFormat::pcd);
+  EXPECT_EQ(ok.cloud.size(), 1u);
+  const std::pair<std::string, std::string> cases[] = {
+      {"1 2 3 banana 0 0 0 0\n",
+       "line 12: 'banana' is not an unsigned integer of 4 byte(s) "
+       "(field 'rgb')"},
+      {"1 2 3 4294967296 0 0 0 0\n", "'4294967296' is not an unsigned integer"},
+      {"1 2 3 -1 0 0 0 0\n", "'-1' is not an unsigned integer"},
+      {"1 2 3 0 128 0 0 0\n", "'128' is not a signed integer of 1 byte(s) (field 'label')"},
+      {"1 2 3 0 0 0 banana 0\n", "'banana' is not a number (field 'normal')"},
+  };
+  for (const auto& [body, message] : cases) {
+    SCOPED_TRACE(body);
+    const std::string error = text_error(header + body, FileFormat::pcd);
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
+TEST(IoStrict, BytesAfterBinaryDataAreAnErrorExceptPagePadding) {
+  Bytes points;
+  for (const float v : {1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f}) points.le(v);
+  const std::string pcd = pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 2, 1, "binary");
+  const std::string data = pcd + points.str();
+  // PCL before 1.10 padded its files with zeros to a page after the header (real files in
+  // pcl_kinect_frames end with 3901 zero bytes).
+  const std::string padding(4096 - pcd.size(), '\0');
+  EXPECT_EQ(read_text(data + padding, FileFormat::pcd).cloud.size(), 2u);
+  const std::string one =
+      text_error(data + padding.substr(1) + std::string(1, '\x01'), FileFormat::pcd);
+  EXPECT_NE(one.find("byte " + std::to_string(data.size()) + ": " + std::to_string(padding.size()) +
+                     " bytes after the point data"),
+            std::string::npos)
+      << one;
+  const std::string zeros = text_error(data + std::string(70000, '\0'), FileFormat::pcd);
+  EXPECT_NE(zeros.find("70000 bytes after the point data"), std::string::npos) << zeros;
+
+  const std::string block = lzf_block(points.str());
+  Bytes compressed;
+  compressed.text(pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 2, 1, "binary_compressed"))
+      .le(static_cast<std::uint32_t>(block.size()))
+      .le(static_cast<std::uint32_t>(points.str().size()))
+      .text(block);
+  EXPECT_EQ(read_text(compressed.str() + padding, FileFormat::pcd).cloud.size(), 2u);
+  const std::string after = text_error(compressed.str() + "junk", FileFormat::pcd);
+  EXPECT_NE(after.find("4 bytes after the point data"), std::string::npos) << after;
+
+  const std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n" +
+      points.str();
+  EXPECT_EQ(read_text(ply, FileFormat::ply).cloud.size(), 2u);
+  const std::string ply_error = text_error(ply + std::string(1, '\0'), FileFormat::ply);
+  EXPECT_NE(
+      ply_error.find("byte " + std::to_string(ply.size()) + ": 1 bytes after the last element"),
+      std::string::npos)
+      << ply_error;
+}
+
 }  // namespace
 }  // namespace sgdicp
