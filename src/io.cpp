@@ -222,7 +222,7 @@ void check_regular_file(const fs::path& path, const std::string& name) {
   const fs::file_status status = fs::status(path, ec);
   if (ec || status.type() == fs::file_type::regular) return;  // missing: fopen says why
   if (status.type() == fs::file_type::directory) {
-    throw IoError(name + ": cannot open: " + system_message(EISDIR));
+    throw IoError(name + ": cannot read: " + system_message(EISDIR));
   }
   const char* kind = status.type() == fs::file_type::character ? "a character device"
                      : status.type() == fs::file_type::block   ? "a block device"
