@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "parse_number.hpp"
 #include "sgdicp/error.hpp"
 
 namespace sgdicp {
@@ -93,10 +94,6 @@ void append_little_endian(std::string& out, T value) {
   out.append(raw.data(), raw.size());
 }
 
-float to_float(double value) {
-  return to_float_saturating(value);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Text helpers
 
@@ -135,44 +132,31 @@ std::vector<std::string_view> split_whitespace(std::string_view line) {
   return tokens;
 }
 
-// A whole token as a float, correctly rounded from the decimal text. Accepts a leading '+',
-// "nan" and "inf"; values beyond the float range become +-inf or +-0 (as strtof would).
-bool parse_float(std::string_view token, float& out) {
-  const char* first = token.data();
-  const char* const last = first + token.size();
-  if (first != last && *first == '+') {
-    ++first;  // std::from_chars rejects an explicit plus sign
-    if (first != last && *first == '-') return false;
-  }
-  if (first == last) return false;
-  float value = 0.0f;
-  const auto [end, error] = std::from_chars(first, last, value);
-  if (end != last || (error != std::errc() && error != std::errc::result_out_of_range)) {
-    return false;
-  }
-  if (error == std::errc()) {
-    out = value;
-    return true;
-  }
-  double wide = 0.0;
-  if (const auto r = std::from_chars(first, last, wide); r.ec == std::errc()) {
-    out = to_float(wide);
-    return true;
-  }
-  // Beyond double as well: the sign of the exponent tells overflow from underflow.
-  const bool negative = *first == '-';
-  const std::string_view text(first, static_cast<std::size_t>(last - first));
-  const std::size_t e = text.find_first_of("eE");
-  const bool underflow = e != std::string_view::npos && e + 1 < text.size() && text[e + 1] == '-';
-  const float magnitude = underflow ? 0.0f : std::numeric_limits<float>::infinity();
-  out = negative ? -magnitude : magnitude;
-  return true;
-}
-
 bool parse_uint(std::string_view token, std::uint64_t& out) {
   const char* const last = token.data() + token.size();
   const auto [end, error] = std::from_chars(token.data(), last, out);
   return !token.empty() && error == std::errc() && end == last;
+}
+
+// Whether a token is an integer (one optional sign) that fits `bytes` bytes, signed or not:
+// the text of an integer field, where "banana", "1.5" or "300" for a uchar are errors.
+bool is_integer_token(std::string_view token, std::size_t bytes, bool is_signed) {
+  if (token.starts_with('+')) token.remove_prefix(1);
+  if (token.empty() || token.front() == '+') return false;
+  const char* const last = token.data() + token.size();
+  const unsigned bits = static_cast<unsigned>(bytes * 8);
+  if (is_signed) {
+    std::int64_t v = 0;
+    const auto [end, error] = std::from_chars(token.data(), last, v);
+    if (error != std::errc() || end != last) return false;
+    const std::int64_t max =
+        bits >= 64 ? std::numeric_limits<std::int64_t>::max() : (std::int64_t{1} << (bits - 1)) - 1;
+    return v <= max && v >= -max - 1;
+  }
+  std::uint64_t v = 0;
+  const auto [end, error] = std::from_chars(token.data(), last, v);
+  if (error != std::errc() || end != last) return false;
+  return bits >= 64 || v <= (std::uint64_t{1} << bits) - 1;
 }
 
 // Walks text by lines or by whitespace-separated tokens and keeps the line number for messages.
@@ -228,18 +212,49 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
+std::string limit_text(std::uint64_t bytes) {
+  return std::to_string(bytes) + " bytes = " + std::to_string(bytes >> 30) + " GiB";
+}
+
+// Only regular files: a device or FIFO has no size to check, and /dev/zero never ends.
+void check_regular_file(const fs::path& path, const std::string& name) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || status.type() == fs::file_type::regular) return;  // missing: fopen says why
+  if (status.type() == fs::file_type::directory) {
+    throw IoError(name + ": cannot read: " + system_message(EISDIR));
+  }
+  const char* kind = status.type() == fs::file_type::character ? "a character device"
+                     : status.type() == fs::file_type::block   ? "a block device"
+                     : status.type() == fs::file_type::fifo    ? "a FIFO"
+                     : status.type() == fs::file_type::socket  ? "a socket"
+                                                               : "not a regular file";
+  throw IoError(name + ": " + kind +
+                " (only regular files are read, so that their size bounds what is read)");
+}
+
 std::vector<char> read_whole_file(const fs::path& path, const std::string& name) {
+  check_regular_file(path, name);
   errno = 0;
   const FilePtr file(std::fopen(path.string().c_str(), "rb"));
   if (!file) throw IoError(name + ": cannot open: " + system_message(errno));
   std::error_code size_error;
   const auto expected = fs::file_size(path, size_error);
-  // One byte more than expected so that the end of file is seen by the first read.
-  std::vector<char> bytes(size_error ? std::size_t{1} << 16
-                                     : static_cast<std::size_t>(expected) + 1);
+  if (size_error) throw IoError(name + ": cannot read the size: " + size_error.message());
+  const auto too_large = [&]() {
+    return IoError(name + ": larger than the largest file read (" + limit_text(kMaxFileBytes) +
+                   ")");
+  };
+  if (expected > kMaxFileBytes) throw too_large();
+  // One byte more than expected so that the end of file is seen by the first read; a file that
+  // grows while it is read is still bounded by kMaxFileBytes.
+  std::vector<char> bytes(static_cast<std::size_t>(expected) + 1);
   std::size_t used = 0;
   for (;;) {
-    if (used == bytes.size()) bytes.resize(bytes.size() * 2);
+    if (used == bytes.size()) {
+      if (used > kMaxFileBytes) throw too_large();
+      bytes.resize(std::min<std::size_t>(bytes.size() * 2, kMaxFileBytes + 1));
+    }
     errno = 0;
     const std::size_t got = std::fread(bytes.data() + used, 1, bytes.size() - used, file.get());
     used += got;
@@ -270,18 +285,50 @@ void write_whole_file(const fs::path& path, const std::string& name, std::string
 // ---------------------------------------------------------------------------------------------
 // Output of the readers
 
-void add_point(ReadResult& result, float x, float y, float z) {
-  if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
-    result.cloud.points.emplace_back(x, y, z);
-  } else {
-    ++result.non_finite_dropped;
+// Every reader hands each parsed point here, in double: the one place where coordinates are
+// converted to the float storage and non-finite points are dropped and counted.
+class PointSink {
+ public:
+  PointSink(const std::string& name, ReadResult& result) : name_(name), result_(result) {}
+
+  void add(double x, double y, double z) {
+    if (++seen_ > kMaxCloudPoints) {
+      throw FormatError(name_ + ": more than the largest cloud read (" +
+                        std::to_string(kMaxCloudPoints) + " points)");
+    }
+    // Beyond the float range counts as non-finite too: storage cannot hold it.
+    const float xf = to_float_saturating(x);
+    const float yf = to_float_saturating(y);
+    const float zf = to_float_saturating(z);
+    if (std::isfinite(xf) && std::isfinite(yf) && std::isfinite(zf)) {
+      result_.cloud.points.emplace_back(xf, yf, zf);
+    } else {
+      ++result_.non_finite_dropped;
+    }
   }
+
+  // Reserves for a declared count, but never more than the data could hold: a header can lie.
+  void reserve(std::uint64_t declared, std::size_t upper_bound) {
+    result_.cloud.points.reserve(
+        static_cast<std::size_t>(std::min<std::uint64_t>(declared, upper_bound)));
+  }
+
+  [[nodiscard]] ReadResult& result() { return result_; }
+
+ private:
+  const std::string& name_;
+  ReadResult& result_;
+  std::uint64_t seen_ = 0;
+};
+
+// A declared point count beyond the largest cloud: the message names the count and the limit.
+bool beyond_cloud_limit(std::uint64_t points) {
+  return points > kMaxCloudPoints;
 }
 
-// Reserves for a declared count, but never more than the data could hold: a header can lie.
-void reserve_points(ReadResult& result, std::uint64_t declared, std::size_t upper_bound) {
-  result.cloud.points.reserve(
-      static_cast<std::size_t>(std::min<std::uint64_t>(declared, upper_bound)));
+std::string cloud_limit_text(std::uint64_t points) {
+  return std::to_string(points) + " points exceed the largest cloud read (" +
+         std::to_string(kMaxCloudPoints) + " points)";
 }
 
 // Smallest text for one point: "0 0 0\n".
@@ -399,7 +446,7 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
     } else if (key == "VIEWPOINT") {
       expect_values(7);
       for (const auto v : values) {
-        if (float f = 0.0f; !parse_float(v, f)) {
+        if (double f = 0.0; !parse_number(v, f)) {
           fail_line(name, at, "VIEWPOINT value " + shown(v) + " is not a number");
         }
       }
@@ -471,11 +518,40 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
               "POINTS " + std::to_string(header.points) + " does not match WIDTH x HEIGHT = " +
                   std::to_string(header.width) + " x " + std::to_string(header.height));
   }
+  if (beyond_cloud_limit(header.points)) {
+    fail_line(name, have_points ? header.points_line : header.data_line,
+              cloud_limit_text(header.points));
+  }
   return header;
 }
 
+// Every value of a data line is of its field's type: a number for F, an integer that fits SIZE
+// bytes for I and U. The line has as many values as the fields' COUNTs add up to.
+void check_pcd_values(const std::string& name, std::size_t line_number, const PcdHeader& header,
+                      std::string_view line) {
+  std::size_t field = 0;
+  std::uint64_t left = header.fields.empty() ? 0 : header.fields[0].count;
+  for (const std::string_view token : split_whitespace(line)) {
+    while (left == 0) left = header.fields[++field].count;
+    const PcdField& f = header.fields[field];
+    double ignored = 0.0;
+    const bool ok = f.type == 'F' ? parse_number(token, ignored)
+                                  : is_integer_token(token, f.size, f.type == 'I');
+    if (!ok) {
+      fail_line(name, line_number,
+                shown(token) + " is not " +
+                    (f.type == 'F'
+                         ? std::string("a number")
+                         : (f.type == 'I' ? "a signed" : "an unsigned") +
+                               std::string(" integer of ") + std::to_string(f.size) + " byte(s)") +
+                    " (field '" + f.name + "')");
+    }
+    --left;
+  }
+}
+
 void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor& cursor,
-                    ReadResult& result) {
+                    PointSink& sink) {
   // Column of x, y and z on a line, where fields with COUNT > 1 take several columns.
   std::array<std::uint64_t, 3> column{};
   std::uint64_t columns = 0;
@@ -488,7 +564,7 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
     columns = *next;
   }
 
-  reserve_points(result, header.points, cursor.remaining() / kMinTextPointBytes);
+  sink.reserve(header.points, cursor.remaining() / kMinTextPointBytes);
   std::uint64_t read = 0;
   std::string_view line;
   while (read < header.points) {
@@ -515,13 +591,14 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
       fail_line(name, cursor.line(),
                 "expected " + std::to_string(columns) + " values, got " + std::to_string(count));
     }
-    std::array<float, 3> p{};
+    check_pcd_values(name, cursor.line(), header, line);
+    std::array<double, 3> p{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      if (!parse_float(xyz[axis], p[axis])) {
+      if (!parse_number(xyz[axis], p[axis])) {
         fail_line(name, cursor.line(), shown(xyz[axis]) + " is not a number");
       }
     }
-    add_point(result, p[0], p[1], p[2]);
+    sink.add(p[0], p[1], p[2]);
     ++read;
   }
   while (cursor.next_line(line)) {
@@ -532,8 +609,8 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
   }
 }
 
-float load_pcd_coordinate(const char* p, std::size_t size) {
-  return size == 4 ? load<float>(p, false) : to_float(load<double>(p, false));
+double load_pcd_coordinate(const char* p, std::size_t size) {
+  return size == 4 ? load<float>(p, false) : load<double>(p, false);
 }
 
 // Byte layout of one point: offset of each field and the total size.
@@ -554,8 +631,22 @@ PcdLayout pcd_layout(const std::string& name, const PcdHeader& header) {
   return layout;
 }
 
+// The bytes after binary point data must be none, or zeros that fill a page: PCL before 1.10
+// stretched its files to a page (4096 bytes, up to 64 KiB on some systems) plus the data.
+void check_pcd_end(const std::string& name, std::string_view data, std::size_t end) {
+  constexpr std::size_t kLargestPage = std::size_t{1} << 16;
+  const std::string_view rest = data.substr(end);
+  const bool page_padding =
+      rest.size() < kLargestPage && rest.find_first_not_of('\0') == std::string_view::npos;
+  if (!page_padding) {
+    fail_byte(name, end,
+              std::to_string(rest.size()) +
+                  " bytes after the point data (only zeros that fill a page may follow)");
+  }
+}
+
 void read_pcd_binary(const std::string& name, const PcdHeader& header, std::string_view data,
-                     ReadResult& result) {
+                     PointSink& sink) {
   const PcdLayout layout = pcd_layout(name, header);
   const std::size_t available = data.size() - header.data_offset;
   const auto need = checked_mul(header.points, layout.point_size);
@@ -564,6 +655,7 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
               "truncated binary data (need " + byte_count_text(need) +
                   " bytes of point data, have " + std::to_string(available) + ")");
   }
+  check_pcd_end(name, data, header.data_offset + static_cast<std::size_t>(*need));
   const char* const base = data.data() + header.data_offset;
   const std::size_t step = static_cast<std::size_t>(layout.point_size);
   std::array<std::size_t, 3> offset{};
@@ -573,19 +665,51 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
     size[axis] = header.fields[header.xyz[axis]].size;
   }
   const auto n = static_cast<std::size_t>(header.points);
-  result.cloud.points.reserve(n);
+  sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
     const char* const point = base + i * step;
-    add_point(result, load_pcd_coordinate(point + offset[0], size[0]),
-              load_pcd_coordinate(point + offset[1], size[1]),
-              load_pcd_coordinate(point + offset[2], size[2]));
+    sink.add(load_pcd_coordinate(point + offset[0], size[0]),
+             load_pcd_coordinate(point + offset[1], size[1]),
+             load_pcd_coordinate(point + offset[2], size[2]));
   }
 }
 
+// Size of the output of an LZF block, found by walking its control bytes without writing
+// anything, so that a lying or corrupt block is rejected before its output is allocated.
+// nullopt when the block is corrupt: a run or reference cut off by the end, or a back reference
+// to before the start of the output. Format: a control byte c < 32 starts a run of c + 1 literal
+// bytes; otherwise it is a back reference of length (c >> 5) + 2 (a second byte extends length
+// 7), its offset ((c & 31) << 8) + the next byte + 1.
+std::optional<std::uint64_t> lzf_output_size(std::string_view block) {
+  std::uint64_t out = 0;
+  std::size_t in = 0;
+  while (in < block.size()) {
+    const auto control = static_cast<unsigned char>(block[in++]);
+    if (control < 32) {
+      const std::size_t run = control + 1u;
+      if (run > block.size() - in) return std::nullopt;
+      in += run;
+      out += run;
+      continue;
+    }
+    std::uint64_t length = control >> 5;
+    if (length == 7) {
+      if (in >= block.size()) return std::nullopt;
+      length += static_cast<unsigned char>(block[in++]);
+    }
+    if (in >= block.size()) return std::nullopt;
+    const std::uint64_t offset =
+        ((std::uint64_t{control} & 31u) << 8) + static_cast<unsigned char>(block[in++]) + 1;
+    if (offset > out) return std::nullopt;
+    out += length + 2;
+  }
+  return out;
+}
+
 void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::string_view data,
-                         ReadResult& result) {
-  // LZF emits at most 264 bytes per 3-byte back reference; a larger claimed ratio is a lie.
-  constexpr std::uint64_t kMaxLzfRatio = 100;
+                         PointSink& sink) {
+  // The most LZF can expand: a 3-byte back reference emits at most 264 bytes.
+  constexpr std::uint64_t kMaxLzfRatio = 264 / 3;
   const PcdLayout layout = pcd_layout(name, header);
   const std::size_t start = header.data_offset;
   const std::size_t available = data.size() - start;
@@ -606,11 +730,19 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
               "truncated compressed data (need " + std::to_string(compressed) + " bytes, have " +
                   std::to_string(available - 8) + ")");
   }
+  check_pcd_end(name, data, start + 8 + compressed);
   if (uncompressed == 0) return;
   if (uncompressed > std::uint64_t{compressed} * kMaxLzfRatio) {
     fail_byte(name, start + 4,
               "uncompressed size " + std::to_string(uncompressed) + " is impossible for " +
                   std::to_string(compressed) + " bytes of LZF data");
+  }
+  const std::string_view block = data.substr(start + 8, compressed);
+  if (const auto decoded = lzf_output_size(block); decoded != uncompressed) {
+    fail_byte(name, start + 8,
+              !decoded ? "corrupt LZF data"
+                       : "LZF data decompress to " + std::to_string(*decoded) +
+                             " bytes, expected " + std::to_string(uncompressed));
   }
   std::vector<char> raw(uncompressed);
   const unsigned int got =
@@ -630,27 +762,27 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
     column[axis] = raw.data() + n * static_cast<std::size_t>(layout.field_offset[field]);
     size[axis] = header.fields[field].size;
   }
-  result.cloud.points.reserve(n);
+  sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
-    add_point(result, load_pcd_coordinate(column[0] + i * size[0], size[0]),
-              load_pcd_coordinate(column[1] + i * size[1], size[1]),
-              load_pcd_coordinate(column[2] + i * size[2], size[2]));
+    sink.add(load_pcd_coordinate(column[0] + i * size[0], size[0]),
+             load_pcd_coordinate(column[1] + i * size[1], size[1]),
+             load_pcd_coordinate(column[2] + i * size[2], size[2]));
   }
 }
 
-void read_pcd(const std::string& name, std::string_view data, ReadResult& result) {
+void read_pcd(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   const PcdHeader header = parse_pcd_header(name, cursor);
-  result.points_in_file = static_cast<std::size_t>(header.points);
+  sink.result().points_in_file = static_cast<std::size_t>(header.points);
   switch (header.data) {
     case PcdData::ascii:
-      read_pcd_ascii(name, header, cursor, result);
+      read_pcd_ascii(name, header, cursor, sink);
       break;
     case PcdData::binary:
-      read_pcd_binary(name, header, data, result);
+      read_pcd_binary(name, header, data, sink);
       break;
     case PcdData::binary_compressed:
-      read_pcd_compressed(name, header, data, result);
+      read_pcd_compressed(name, header, data, sink);
       break;
   }
 }
@@ -684,6 +816,15 @@ std::optional<PlyType> ply_type(std::string_view name) {
     if (text == name) return type;
   }
   return std::nullopt;
+}
+
+// The PLY name of a type, from the table above (its first spelling).
+std::string ply_type_name(PlyType type) {
+  for (const std::string_view name :
+       {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"}) {
+    if (ply_type(name) == type) return std::string(name);
+  }
+  return "value";
 }
 
 std::size_t ply_size(PlyType type) {
@@ -724,11 +865,6 @@ double ply_value(PlyType type, const char* p, bool big_endian) {
       return load<double>(p, big_endian);
   }
   return 0.0;
-}
-
-float ply_coordinate(PlyType type, const char* p, bool big_endian) {
-  return type == PlyType::f32 ? load<float>(p, big_endian)
-                              : to_float(ply_value(type, p, big_endian));
 }
 
 struct PlyProperty {
@@ -844,17 +980,29 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
       fail_line(name, vertex->line, "vertex property '" + found->name + "' is a list");
     header.xyz[axis] = static_cast<std::size_t>(found - props.begin());
   }
+  if (beyond_cloud_limit(vertex->count)) {
+    fail_line(name, vertex->line, "element vertex: " + cloud_limit_text(vertex->count));
+  }
   return header;
 }
 
+// Whether a token is a value of a PLY type: a number for float and double, an integer that
+// fits the type for the others.
+bool is_ply_value(PlyType type, std::string_view token) {
+  double ignored = 0.0;
+  if (type == PlyType::f32 || type == PlyType::f64) return parse_number(token, ignored);
+  const bool is_signed = type == PlyType::i8 || type == PlyType::i16 || type == PlyType::i32;
+  return is_integer_token(token, ply_size(type), is_signed);
+}
+
 void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor& cursor,
-                    ReadResult& result) {
+                    PointSink& sink) {
   std::string_view token;
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
     const PlyElement& element = header.elements[e];
     const bool is_vertex = e == header.vertex;
     if (element.properties.empty()) continue;  // records without properties take no text
-    if (is_vertex) reserve_points(result, element.count, cursor.remaining() / kMinTextPointBytes);
+    if (is_vertex) sink.reserve(element.count, cursor.remaining() / kMinTextPointBytes);
     for (std::uint64_t r = 0; r < element.count; ++r) {
       const auto next = [&]() {
         if (!cursor.next_token(token)) {
@@ -864,27 +1012,42 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
         }
         return token;
       };
-      std::array<float, 3> p{};
+      std::array<double, 3> p{};
       for (std::size_t k = 0; k < element.properties.size(); ++k) {
         const PlyProperty& property = element.properties[k];
         const std::string_view value = next();
+        const auto check = [&](PlyType type, std::string_view text) {
+          if (!is_ply_value(type, text)) {
+            fail_line(name, cursor.line(),
+                      shown(text) + " is not " +
+                          (type == PlyType::f32 || type == PlyType::f64
+                               ? std::string("a number")
+                               : "a " + ply_type_name(type) + " value") +
+                          " (property '" + property.name + "')");
+          }
+        };
         if (property.is_list) {
           std::uint64_t length = 0;
-          if (!parse_uint(value, length)) {
+          if (!parse_uint(value, length) || !is_ply_value(property.count_type, value)) {
             fail_line(name, cursor.line(),
-                      shown(value) + " is not a list length (property '" + property.name + "')");
+                      shown(value) + " is not a list length of type " +
+                          ply_type_name(property.count_type) + " (property '" + property.name +
+                          "')");
           }
-          for (std::uint64_t i = 0; i < length; ++i) next();
-        } else if (is_vertex) {
+          for (std::uint64_t i = 0; i < length; ++i) check(property.type, next());
+          continue;
+        }
+        check(property.type, value);
+        if (is_vertex) {
           for (std::size_t axis = 0; axis < 3; ++axis) {
-            if (header.xyz[axis] == k && !parse_float(value, p[axis])) {
+            if (header.xyz[axis] == k && !parse_number(value, p[axis])) {
               fail_line(name, cursor.line(),
                         shown(value) + " is not a number (property '" + property.name + "')");
             }
           }
         }
       }
-      if (is_vertex) add_point(result, p[0], p[1], p[2]);
+      if (is_vertex) sink.add(p[0], p[1], p[2]);
     }
   }
   if (cursor.next_token(token)) {
@@ -903,7 +1066,7 @@ std::optional<std::size_t> ply_fixed_stride(const PlyElement& element) {
 }
 
 void read_ply_binary(const std::string& name, const PlyHeader& header, std::string_view data,
-                     ReadResult& result) {
+                     PointSink& sink) {
   const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
   std::size_t pos = header.data_offset;
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
@@ -931,12 +1094,12 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
           }
         }
         const auto n = static_cast<std::size_t>(element.count);
-        result.cloud.points.reserve(n);
+        sink.reserve(n, n);
         for (std::size_t i = 0; i < n; ++i) {
           const char* const record = data.data() + pos + i * *stride;
-          add_point(result, ply_coordinate(xyz_type[0], record + xyz_offset[0], big_endian),
-                    ply_coordinate(xyz_type[1], record + xyz_offset[1], big_endian),
-                    ply_coordinate(xyz_type[2], record + xyz_offset[2], big_endian));
+          sink.add(ply_value(xyz_type[0], record + xyz_offset[0], big_endian),
+                   ply_value(xyz_type[1], record + xyz_offset[1], big_endian),
+                   ply_value(xyz_type[2], record + xyz_offset[2], big_endian));
         }
       }
       pos += static_cast<std::size_t>(*need);
@@ -944,7 +1107,7 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
     }
 
     // Records with lists: walk them one property at a time.
-    if (is_vertex) reserve_points(result, element.count, (data.size() - pos) / 3);
+    if (is_vertex) sink.reserve(element.count, (data.size() - pos) / 3);
     for (std::uint64_t r = 0; r < element.count; ++r) {
       const auto take = [&](std::uint64_t bytes) {
         const std::size_t start = pos;
@@ -974,22 +1137,27 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
         take(bytes ? *bytes : std::numeric_limits<std::uint64_t>::max());
       }
       if (is_vertex) {
-        add_point(result, ply_coordinate(xyz_type[0], data.data() + xyz_offset[0], big_endian),
-                  ply_coordinate(xyz_type[1], data.data() + xyz_offset[1], big_endian),
-                  ply_coordinate(xyz_type[2], data.data() + xyz_offset[2], big_endian));
+        sink.add(ply_value(xyz_type[0], data.data() + xyz_offset[0], big_endian),
+                 ply_value(xyz_type[1], data.data() + xyz_offset[1], big_endian),
+                 ply_value(xyz_type[2], data.data() + xyz_offset[2], big_endian));
       }
     }
   }
+  if (pos != data.size()) {
+    fail_byte(name, pos,
+              std::to_string(data.size() - pos) +
+                  " bytes after the last element (binary PLY ends with its data)");
+  }
 }
 
-void read_ply(const std::string& name, std::string_view data, ReadResult& result) {
+void read_ply(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   const PlyHeader header = parse_ply_header(name, cursor);
-  result.points_in_file = static_cast<std::size_t>(header.elements[header.vertex].count);
+  sink.result().points_in_file = static_cast<std::size_t>(header.elements[header.vertex].count);
   if (header.encoding == PlyEncoding::ascii) {
-    read_ply_ascii(name, header, cursor, result);
+    read_ply_ascii(name, header, cursor, sink);
   } else {
-    read_ply_binary(name, header, data, result);
+    read_ply_binary(name, header, data, sink);
   }
 }
 
@@ -997,7 +1165,7 @@ void read_ply(const std::string& name, std::string_view data, ReadResult& result
 // Headerless float32 records (KITTI .bin, .f32)
 
 void read_float_records(const std::string& name, std::string_view data, std::size_t floats,
-                        const std::string& layout, ReadResult& result) {
+                        const std::string& layout, PointSink& sink) {
   const std::size_t record = floats * sizeof(float);
   if (data.size() % record != 0) {
     fail_byte(name, data.size() - data.size() % record,
@@ -1005,11 +1173,12 @@ void read_float_records(const std::string& name, std::string_view data, std::siz
                   " bytes is not a multiple of " + std::to_string(record) + " (" + layout + ")");
   }
   const std::size_t n = data.size() / record;
-  result.points_in_file = n;
-  result.cloud.points.reserve(n);
+  if (beyond_cloud_limit(n)) fail_byte(name, 0, cloud_limit_text(n));
+  sink.result().points_in_file = n;
+  sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
     const char* const p = data.data() + i * record;
-    add_point(result, load<float>(p, false), load<float>(p + 4, false), load<float>(p + 8, false));
+    sink.add(load<float>(p, false), load<float>(p + 4, false), load<float>(p + 8, false));
   }
 }
 
@@ -1044,11 +1213,11 @@ std::string column_name(std::string_view field) {
   return lowercase(field);
 }
 
-void read_xyz(const std::string& name, std::string_view data, ReadResult& result) {
+void read_xyz(const std::string& name, std::string_view data, PointSink& sink) {
   std::size_t start = 0;
   if (data.starts_with("\xEF\xBB\xBF")) start = 3;  // UTF-8 byte order mark
   TextCursor cursor(data, start, 1);
-  reserve_points(result, kNoLimit, data.size() / 32);  // a typical line is longer than 32 bytes
+  sink.reserve(kNoLimit, data.size() / 32);  // a typical line is longer than 32 bytes
 
   std::array<std::size_t, 3> column = {0, 1, 2};
   bool header_allowed = true;
@@ -1068,7 +1237,7 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
       return found < needed;
     });
 
-    std::array<float, 3> p{};
+    std::array<double, 3> p{};
     if (header_allowed) {
       header_allowed = false;
       std::string_view first;
@@ -1076,7 +1245,7 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
         first = field;
         return false;
       });
-      if (float ignored = 0.0f; !parse_float(first, ignored)) {
+      if (double ignored = 0.0; !parse_number(first, ignored)) {
         // A header line: use its x, y, z columns when it names all three.
         std::vector<std::string> names;
         for_each_xyz_field(content, [&](std::size_t, std::string_view field) {
@@ -1097,7 +1266,7 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
     }
     // A word where a number belongs says more than the field count, so it is reported first.
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      if (column[axis] < found && !parse_float(xyz[axis], p[axis])) {
+      if (column[axis] < found && !parse_number(xyz[axis], p[axis])) {
         fail_line(name, cursor.line(),
                   shown(xyz[axis]) + " is not a number (column " +
                       std::to_string(column[axis] + 1) + ")");
@@ -1109,15 +1278,15 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
                             : "expected at least " + std::to_string(needed) + " columns, got " +
                                   std::to_string(found));
     }
-    add_point(result, p[0], p[1], p[2]);
-    ++result.points_in_file;
+    sink.add(p[0], p[1], p[2]);
+    ++sink.result().points_in_file;
   }
 }
 
 // ---------------------------------------------------------------------------------------------
 // Legacy ASCII VTK
 
-void read_vtk(const std::string& name, std::string_view data, ReadResult& result) {
+void read_vtk(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   std::string_view line;
   constexpr std::string_view kMagic = "# vtk DataFile Version";
@@ -1157,10 +1326,11 @@ void read_vtk(const std::string& name, std::string_view data, ReadResult& result
     fail_line(name, cursor.line(), "unsupported POINTS type " + shown(type) + " (float or double)");
   }
 
-  result.points_in_file = static_cast<std::size_t>(count);
-  reserve_points(result, count, cursor.remaining() / kMinTextPointBytes);
+  if (beyond_cloud_limit(count)) fail_line(name, cursor.line(), cloud_limit_text(count));
+  sink.result().points_in_file = static_cast<std::size_t>(count);
+  sink.reserve(count, cursor.remaining() / kMinTextPointBytes);
   for (std::uint64_t i = 0; i < count; ++i) {
-    std::array<float, 3> p{};
+    std::array<double, 3> p{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       if (!cursor.next_token(token)) {
         fail_line(name, cursor.line(),
@@ -1168,11 +1338,11 @@ void read_vtk(const std::string& name, std::string_view data, ReadResult& result
                       std::to_string(count * 3) + " numbers), file ends after " +
                       std::to_string(i * 3 + axis) + " numbers");
       }
-      if (!parse_float(token, p[axis])) {
+      if (!parse_number(token, p[axis])) {
         fail_line(name, cursor.line(), shown(token) + " is not a number");
       }
     }
-    add_point(result, p[0], p[1], p[2]);
+    sink.add(p[0], p[1], p[2]);
   }
 }
 
@@ -1235,6 +1405,37 @@ std::string pcd_text(const PointCloud& cloud, Encoding encoding) {
   return out;
 }
 
+// The one parser behind both entry points: the bytes of a whole file in a known format.
+ReadResult parse_point_cloud(const std::string& name, std::string_view data, FileFormat format) {
+  if (data.empty()) fail_byte(name, 0, "empty file");
+  ReadResult result;
+  result.format = format;
+  PointSink sink(name, result);
+  switch (format) {
+    case FileFormat::pcd:
+      read_pcd(name, data, sink);
+      break;
+    case FileFormat::ply:
+      read_ply(name, data, sink);
+      break;
+    case FileFormat::kitti_bin:
+      read_float_records(name, data, 4, "float32 x y z intensity", sink);
+      break;
+    case FileFormat::xyz:
+      read_xyz(name, data, sink);
+      break;
+    case FileFormat::vtk:
+      read_vtk(name, data, sink);
+      break;
+    case FileFormat::f32:
+      read_float_records(name, data, 3, "float32 x y z", sink);
+      break;
+    case FileFormat::automatic:
+      break;  // resolved by the callers
+  }
+  return result;
+}
+
 }  // namespace
 
 std::string to_string(FileFormat format) {
@@ -1276,34 +1477,22 @@ ReadResult read_point_cloud(const std::filesystem::path& path, FileFormat format
       format == FileFormat::automatic ? format_from_extension(path) : format;
   const std::string name = path.string();
   const std::vector<char> bytes = read_whole_file(path, name);
-  if (bytes.empty()) fail_byte(name, 0, "empty file");
-  const std::string_view data(bytes.data(), bytes.size());
+  return parse_point_cloud(name, std::string_view(bytes.data(), bytes.size()), resolved);
+}
 
-  ReadResult result;
-  result.format = resolved;
-  switch (resolved) {
-    case FileFormat::pcd:
-      read_pcd(name, data, result);
-      break;
-    case FileFormat::ply:
-      read_ply(name, data, result);
-      break;
-    case FileFormat::kitti_bin:
-      read_float_records(name, data, 4, "float32 x y z intensity", result);
-      break;
-    case FileFormat::xyz:
-      read_xyz(name, data, result);
-      break;
-    case FileFormat::vtk:
-      read_vtk(name, data, result);
-      break;
-    case FileFormat::f32:
-      read_float_records(name, data, 3, "float32 x y z", result);
-      break;
-    case FileFormat::automatic:
-      break;  // resolved above
+ReadResult read_point_cloud_from_memory(std::span<const std::byte> bytes, FileFormat format,
+                                        std::string_view name) {
+  if (bytes.size() > kMaxFileBytes) {
+    throw FormatError(std::string(name) + ": larger than the largest file read (" +
+                      limit_text(kMaxFileBytes) + ")");
   }
-  return result;
+  if (format == FileFormat::automatic) {
+    throw FormatError(std::string(name) +
+                      ": reading from memory needs an explicit format (no extension to go by)");
+  }
+  return parse_point_cloud(
+      std::string(name),
+      std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), format);
 }
 
 void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud,
