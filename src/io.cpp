@@ -296,10 +296,16 @@ class PointSink {
       throw FormatError(name_ + ": more than the largest cloud read (" +
                         std::to_string(kMaxCloudPoints) + " points)");
     }
-    // Beyond the float range counts as non-finite too: storage cannot hold it.
-    const float xf = to_float_saturating(x);
-    const float yf = to_float_saturating(y);
-    const float zf = to_float_saturating(z);
+    // The first finite point sets the origin the points are stored from (0 unless the cloud is
+    // georeferenced: point_cloud.hpp); beyond the float range counts as non-finite too.
+    if (!has_origin_ && std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
+      result_.cloud.origin_m = georeferencing_origin({x, y, z});
+      has_origin_ = true;
+    }
+    const Eigen::Vector3d& origin = result_.cloud.origin_m;
+    const float xf = to_float_saturating(x - origin.x());
+    const float yf = to_float_saturating(y - origin.y());
+    const float zf = to_float_saturating(z - origin.z());
     if (std::isfinite(xf) && std::isfinite(yf) && std::isfinite(zf)) {
       result_.cloud.points.emplace_back(xf, yf, zf);
     } else {
@@ -319,6 +325,7 @@ class PointSink {
   const std::string& name_;
   ReadResult& result_;
   std::uint64_t seen_ = 0;
+  bool has_origin_ = false;
 };
 
 // A declared point count beyond the largest cloud: the message names the count and the limit.
@@ -1349,39 +1356,57 @@ void read_vtk(const std::string& name, std::string_view data, PointSink& sink) {
 // ---------------------------------------------------------------------------------------------
 // Writers
 
-void append_float_text(std::string& out, float value) {
-  // Shortest text that reads back as the same float.
+// A georeferenced cloud (origin_m not zero) is written as origin + point in double, which float
+// cannot hold; any other cloud as the floats it stores.
+bool written_in_double(const PointCloud& cloud) {
+  return !cloud.origin_m.isZero();
+}
+
+template <typename T>
+void append_number_text(std::string& out, T value) {
+  // Shortest text that reads back as the same number.
   std::array<char, 32> buffer{};
   const auto r = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
   out.append(buffer.data(), r.ptr);
 }
 
-void append_points_text(std::string& out, const PointCloud& cloud) {
-  out.reserve(out.size() + cloud.size() * 36);
+// Each point as the numbers written: `emit(out, value)` for x, y and z, in float or double.
+template <typename Emit>
+void append_points(std::string& out, const PointCloud& cloud, const Emit& emit) {
+  const bool wide = written_in_double(cloud);
   for (const auto& p : cloud.points) {
-    append_float_text(out, p.x());
-    out += ' ';
-    append_float_text(out, p.y());
-    out += ' ';
-    append_float_text(out, p.z());
-    out += '\n';
+    for (Eigen::Index axis = 0; axis < 3; ++axis) {
+      if (wide) {
+        emit(out, static_cast<double>(p[axis]) + cloud.origin_m[axis], axis);
+      } else {
+        emit(out, p[axis], axis);
+      }
+    }
   }
+}
+
+void append_points_text(std::string& out, const PointCloud& cloud) {
+  out.reserve(out.size() + cloud.size() * (written_in_double(cloud) ? 60 : 36));
+  append_points(out, cloud, [](std::string& text, auto value, Eigen::Index axis) {
+    append_number_text(text, value);
+    text += axis < 2 ? ' ' : '\n';
+  });
 }
 
 void append_points_binary(std::string& out, const PointCloud& cloud) {
-  out.reserve(out.size() + cloud.size() * 12);
-  for (const auto& p : cloud.points) {
-    append_little_endian(out, p.x());
-    append_little_endian(out, p.y());
-    append_little_endian(out, p.z());
-  }
+  out.reserve(out.size() + cloud.size() * (written_in_double(cloud) ? 24 : 12));
+  append_points(out, cloud, [](std::string& bytes, auto value, Eigen::Index) {
+    append_little_endian(bytes, value);
+  });
 }
 
 std::string ply_text(const PointCloud& cloud, Encoding encoding) {
+  const std::string type = written_in_double(cloud) ? "double" : "float";
   std::string out = "ply\nformat ";
   out += encoding == Encoding::ascii ? "ascii" : "binary_little_endian";
   out += " 1.0\ncomment written by sgdicp\nelement vertex " + std::to_string(cloud.size()) +
-         "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+         "\nproperty " + type + " x\nproperty " + type + " y\nproperty " + type +
+         " z\nend_header\n";
   if (encoding == Encoding::ascii) {
     append_points_text(out, cloud);
   } else {
@@ -1392,11 +1417,11 @@ std::string ply_text(const PointCloud& cloud, Encoding encoding) {
 
 std::string pcd_text(const PointCloud& cloud, Encoding encoding) {
   const std::string n = std::to_string(cloud.size());
-  std::string out =
-      "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\n"
-      "TYPE F F F\nCOUNT 1 1 1\nWIDTH " +
-      n + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + n + "\nDATA " +
-      (encoding == Encoding::ascii ? "ascii" : "binary") + "\n";
+  const std::string sizes = written_in_double(cloud) ? "SIZE 8 8 8\n" : "SIZE 4 4 4\n";
+  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\n" +
+                    sizes + "TYPE F F F\nCOUNT 1 1 1\nWIDTH " + n +
+                    "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + n + "\nDATA " +
+                    (encoding == Encoding::ascii ? "ascii" : "binary") + "\n";
   if (encoding == Encoding::ascii) {
     append_points_text(out, cloud);
   } else {

@@ -4,6 +4,8 @@
 // (issue: stored as plain floats, a KITTI pair offset by (512345, 4234567, 120) m was snapped to
 // a 0.25-0.5 m grid, moved 1.7 cm and was reported degenerate).
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 
@@ -45,7 +47,9 @@ Eigen::Matrix4d shifted(const Eigen::Matrix4d& T, const Eigen::Vector3d& offset_
 TEST(Georeferencing, OriginIsTheFirstPointRoundedToAKilometre) {
   EXPECT_EQ(georeferencing_origin(kOffset_m), Eigen::Vector3d(512000.0, 4235000.0, 0.0));
   EXPECT_EQ(georeferencing_origin({499.0, -499.0, 80.0}), Eigen::Vector3d::Zero());
-  EXPECT_EQ(georeferencing_origin({1e300, -2e9, 1500.0}), Eigen::Vector3d(0.0, 0.0, 2000.0));
+  EXPECT_FALSE(std::signbit(georeferencing_origin({-0.0, -1.0, 0.0}).x()));
+  EXPECT_EQ(georeferencing_origin({16000.0, -16383.0, 8000.0}), Eigen::Vector3d::Zero());
+  EXPECT_EQ(georeferencing_origin({1e300, -2e9, -20400.0}), Eigen::Vector3d(0.0, 0.0, -20000.0));
 }
 
 TEST(Georeferencing, TransformsBetweenStoredPointsRoundTrip) {
@@ -73,6 +77,48 @@ TEST(Georeferencing, TransformedCloudLandsInTheTargetFrame) {
       T.topRightCorner<3, 1>();
   EXPECT_LT((moved.points[0].cast<double>() + moved.origin_m - world).norm(), 1e-4);
   EXPECT_LT(moved.points[0].cast<double>().norm(), 20.0);  // stored small, hence exact
+}
+
+// Every format that can carry doubles: a georeferenced cloud written and read back keeps every
+// coordinate to < 0.1 mm (float at 4e6 m: 0.25-0.5 m), with the origin the reader picks.
+TEST(Georeferencing, FilesCarryDoublesAndReadBackExactly) {
+  const PointCloud near = synthetic_scene(61, 2000);
+  const Eigen::Vector3d origin = georeferencing_origin(kOffset_m);
+  const PointCloud cloud = georeferenced(near, kOffset_m, origin);
+  const auto dir = std::filesystem::temp_directory_path() / "sgdicp_georeferenced";
+  std::filesystem::create_directories(dir);
+  for (const char* name : {"c.ply", "c.pcd", "c.xyz"}) {
+    for (const Encoding encoding : {Encoding::binary, Encoding::ascii}) {
+      const auto path = dir / name;
+      write_point_cloud(path, cloud, FileFormat::automatic, encoding);
+      const PointCloud back = read_point_cloud(path).cloud;
+      SCOPED_TRACE(std::string(name) + (encoding == Encoding::ascii ? " ascii" : " binary"));
+      ASSERT_EQ(back.size(), cloud.size());
+      EXPECT_EQ(back.origin_m, origin);
+      double largest = 0.0;
+      for (std::size_t i = 0; i < near.size(); ++i) {
+        const Eigen::Vector3d written = near.points[i].cast<double>() + kOffset_m;
+        const Eigen::Vector3d read = back.points[i].cast<double>() + back.origin_m;
+        largest = std::max(largest, (read - written).norm());
+      }
+      EXPECT_LT(largest, 1e-4);
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A cloud near its frame's origin is written as before: floats, origin 0.
+TEST(Georeferencing, CloudsNearTheOriginStayFloat) {
+  const PointCloud near = synthetic_scene(62, 100);
+  const auto path = std::filesystem::temp_directory_path() / "sgdicp_near.ply";
+  write_point_cloud(path, near);
+  const PointCloud back = read_point_cloud(path).cloud;
+  EXPECT_EQ(back.origin_m, Eigen::Vector3d::Zero());
+  EXPECT_EQ(back.points, near.points);
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("property float x"), std::string::npos);
+  std::filesystem::remove(path);
 }
 
 // The largest distance between where two transforms (between the stored points of `source`

@@ -110,12 +110,18 @@ bool same_bits(float a, float b) {
   return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
 }
 
+// A coordinate of a read point in the file's frame: the readers store points from an origin
+// (0 unless the first point lies beyond 16 km: georeferencing_origin in point_cloud.hpp).
+double absolute(const PointCloud& cloud, std::size_t i, int k) {
+  return static_cast<double>(cloud.points[i][k]) + cloud.origin_m[k];
+}
+
 void expect_points(const ReadResult& r, std::initializer_list<std::array<float, 3>> expected) {
   ASSERT_EQ(r.cloud.size(), expected.size());
   std::size_t i = 0;
   for (const auto& e : expected) {
     for (int k = 0; k < 3; ++k) {
-      EXPECT_FLOAT_EQ(r.cloud.points[i][k], e[static_cast<std::size_t>(k)])
+      EXPECT_FLOAT_EQ(static_cast<float>(absolute(r.cloud, i, k)), e[static_cast<std::size_t>(k)])
           << "point " << i << " coordinate " << k;
     }
     ++i;
@@ -236,9 +242,9 @@ TEST_P(RoundTrip, ReadBackIsBitwiseIdentical) {
   ASSERT_EQ(r.cloud.size(), cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
-      ASSERT_TRUE(same_bits(r.cloud.points[i][k], cloud.points[i][k]))
+      ASSERT_EQ(absolute(r.cloud, i, k), absolute(cloud, i, k))
           << "point " << i << " coordinate " << k << ": wrote " << cloud.points[i][k] << ", read "
-          << r.cloud.points[i][k];
+          << r.cloud.points[i][k] << " from " << r.cloud.origin_m[k];
     }
   }
 }

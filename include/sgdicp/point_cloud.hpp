@@ -33,19 +33,21 @@ struct PointCloud {
   [[nodiscard]] bool empty() const noexcept { return points.empty(); }
 };
 
-/// The origin a cloud whose first point is `point_m` gets: each coordinate rounded to the
-/// nearest kilometre, so clouds within 500 m of their frame's origin (almost every sensor frame)
-/// keep origin 0 and exactly the coordinates they had, and the stored floats of a georeferenced
-/// cloud stay within a few km of 0, where float resolves 0.5 mm or better. Nearby clouds of one
-/// survey mostly share an origin; registration re-bases the source when they do not. Coordinates
-/// beyond 1e9 m are no place on Earth: they keep origin 0 (and are then dropped as non-finite
-/// when beyond float's range).
+/// The origin a cloud whose first point is `point_m` gets, per axis: 0 below 16 km, where float
+/// resolves a coordinate to 1 mm or better (so sensor-frame and local-map clouds keep exactly
+/// the floats they always had), else the coordinate rounded to the nearest kilometre, so that the
+/// stored floats of a georeferenced cloud (UTM, survey data: millions of metres) stay within a
+/// few km of 0, where float resolves 0.5 mm or better. Nearby clouds of one survey mostly share
+/// an origin; registration re-bases the source when they do not. Coordinates beyond 1e9 m are no
+/// place on Earth: origin 0 (and dropped as non-finite when beyond float's range).
 [[nodiscard]] inline Eigen::Vector3d georeferencing_origin(const Eigen::Vector3d& point_m) {
+  constexpr double kFloatIsEnough_m = 16384.0;  // float's spacing below: 2^-10 m (< 1 mm)
   constexpr double kGrid_m = 1000.0;
-  constexpr double kLargest_m = 1e9;  // beyond any Earth-fixed coordinate: not a place, an error
+  constexpr double kLargest_m = 1e9;
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (Eigen::Index axis = 0; axis < 3; ++axis) {
-    if (std::abs(point_m[axis]) <= kLargest_m) {
+    const double magnitude = std::abs(point_m[axis]);
+    if (magnitude >= kFloatIsEnough_m && magnitude <= kLargest_m) {
       origin[axis] = std::round(point_m[axis] / kGrid_m) * kGrid_m;
     }
   }

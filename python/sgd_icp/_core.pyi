@@ -632,8 +632,10 @@ class ReferenceIndex:
 
     def __len__(self) -> int: ...
     @property
-    def points(self) -> npt.NDArray[np.float32]:
-        """The indexed points: a read-only (N, 3) float32 view (no copy)."""
+    def points(self) -> npt.NDArray[np.float32] | npt.NDArray[np.float64]:
+        """The indexed points: a read-only (N, 3) float32 view (no copy); a float64 copy for
+        georeferenced points.
+        """
     @property
     def non_finite_dropped(self) -> int:
         """Rows of the input dropped for a NaN or infinite coordinate."""
@@ -817,9 +819,11 @@ def register(
     ----------
     source : (N, 3) float32 or float64 array, metres
         The cloud that moves. Any memory layout (C, Fortran, strided slices). It is copied once into
-        the library's float32 storage; rows with a NaN or infinite coordinate are dropped and
-        counted
-        (result.source_non_finite_dropped).
+        the library's float32 storage (float64 georeferenced coordinates, e.g. UTM, are stored
+        from an
+        origin near the cloud, exactly: docs/io.md); rows with a NaN or infinite coordinate are
+        dropped
+        and counted (result.source_non_finite_dropped).
     reference : (M, 3) array like `source`, or ReferenceIndex
         The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
         also from several threads at once; an array builds one for this call (result.build_ms),
@@ -1013,8 +1017,10 @@ class ReadResult:
     """A point cloud read from a file, with its counts."""
 
     @property
-    def points(self) -> npt.NDArray[np.float32]:
-        """(N, 3) float32 array of the finite points, in file order, metres."""
+    def points(self) -> npt.NDArray[np.float32] | npt.NDArray[np.float64]:
+        """(N, 3) float32 array of the finite points, in file order, metres (float64 for
+        georeferenced coordinates, which float32 cannot hold: docs/io.md).
+        """
     @property
     def points_in_file(self) -> int:
         """Points the file declares or contains (= N + non_finite_dropped)."""
@@ -1034,19 +1040,22 @@ def read_point_cloud(path: _Path, format: str = "auto") -> ReadResult:
     """
 
 
-def read_points(path: _Path, format: str = "auto") -> npt.NDArray[np.float32]:
-    """Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points; see
-    read_point_cloud for the formats, the counts and the errors.
+def read_points(
+    path: _Path, format: str = "auto"
+) -> npt.NDArray[np.float32] | npt.NDArray[np.float64]:
+    """Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points (float64
+    for georeferenced coordinates, docs/io.md); see read_point_cloud for the formats, the counts
+    and the errors.
     """
 
 
 def write_points(
     path: _Path, points: _Points, format: str = "auto", encoding: str = "binary"
 ) -> None:
-    """Writes an (N, 3) float32/float64 array (converted to float32) as PLY, PCD or XYZ, chosen from
-    the extension unless format ('ply', 'pcd', 'xyz') is given. encoding: 'binary' (default) or
-    'ascii' (XYZ is always text). Reading the file back gives the same float32 values. Raises
-    IoError (OSError) or FormatError (ValueError).
+    """Writes an (N, 3) float32/float64 array as PLY, PCD or XYZ (float32 values; georeferenced
+    float64 coordinates as float64), chosen from the extension unless format ('ply', 'pcd',
+    'xyz') is given. encoding: 'binary' (default) or 'ascii' (XYZ is always text). Reading the
+    file back gives the same values. Raises IoError (OSError) or FormatError (ValueError).
     """
 
 

@@ -342,8 +342,9 @@ Parameters
 ----------
 source : (N, 3) float32 or float64 array, metres
     The cloud that moves. Any memory layout (C, Fortran, strided slices). It is copied once into
-    the library's float32 storage; rows with a NaN or infinite coordinate are dropped and counted
-    (result.source_non_finite_dropped).
+    the library's float32 storage (float64 georeferenced coordinates, e.g. UTM, are stored from an
+    origin near the cloud, exactly: docs/io.md); rows with a NaN or infinite coordinate are dropped
+    and counted (result.source_non_finite_dropped).
 reference : (M, 3) array like `source`, or ReferenceIndex
     The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
     also from several threads at once; an array builds one for this call (result.build_ms),
@@ -427,7 +428,8 @@ void bind_reference_index(py::module_& m) {
           [](const py::object& self) {
             return readonly_view(self.cast<const SharedIndex&>().index.cloud(), self);
           },
-          "The indexed points: a read-only (N, 3) float32 view (no copy).")
+          "The indexed points: a read-only (N, 3) float32 view (no copy); a float64 copy for "
+          "georeferenced points.")
       .def_property_readonly(
           "non_finite_dropped", [](const SharedIndex& s) { return s.non_finite_dropped; },
           "Rows of the input dropped for a NaN or infinite coordinate.")
@@ -531,7 +533,8 @@ void bind_register_and_io(py::module_& m) {
 
   py::class_<ReadPoints>(m, "ReadResult", "A point cloud read from a file, with its counts.")
       .def_readonly("points", &ReadPoints::points,
-                    "(N, 3) float32 array of the finite points, in file order, metres.")
+                    "(N, 3) float32 array of the finite points, in file order, metres (float64 for "
+                    "georeferenced coordinates, which float32 cannot hold: docs/io.md).")
       .def_readonly("points_in_file", &ReadPoints::points_in_file,
                     "Points the file declares or contains (= N + non_finite_dropped).")
       .def_readonly("non_finite_dropped", &ReadPoints::non_finite_dropped,
@@ -556,8 +559,9 @@ void bind_register_and_io(py::module_& m) {
         return read_points_with_info(path, format).points;
       },
       "path"_a, "format"_a = "auto",
-      "Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points; see "
-      "read_point_cloud for the formats, the counts and the errors.");
+      "Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points "
+      "(float64 for georeferenced coordinates, docs/io.md); see read_point_cloud for the "
+      "formats, the counts and the errors.");
   m.def(
       "write_points",
       [](const std::filesystem::path& path, const py::handle& points, const py::handle& format,
@@ -570,10 +574,11 @@ void bind_register_and_io(py::module_& m) {
         write_point_cloud(path, cloud.cloud, f, e);
       },
       "path"_a, "points"_a, "format"_a = "auto", "encoding"_a = "binary",
-      "Writes an (N, 3) float32/float64 array (converted to float32) as PLY, PCD or XYZ, chosen "
-      "from the extension unless format ('ply', 'pcd', 'xyz') is given. encoding: 'binary' "
-      "(default) or 'ascii' (XYZ is always text). Reading the file back gives the same float32 "
-      "values. Raises IoError (OSError) or FormatError (ValueError).");
+      "Writes an (N, 3) float32/float64 array as PLY, PCD or XYZ (float32 values; "
+      "georeferenced float64 coordinates as float64), chosen from the extension unless format "
+      "('ply', 'pcd', 'xyz') is given. encoding: 'binary' (default) or 'ascii' (XYZ is always "
+      "text). Reading the file back gives the same values. Raises IoError (OSError) or FormatError "
+      "(ValueError).");
 }
 
 void bind_metrics(py::module_& m) {

@@ -63,3 +63,15 @@ def test_preprocessing_returns_float64_for_georeferenced_points(scene):
     assert len(np.unique(np.round(frac, 3))) > 10
     near = sgd_icp.voxel_downsample(scene[0], 0.05)
     assert near.dtype == np.float32
+
+
+def test_files_round_trip_georeferenced_points(tmp_path, scene):
+    source = scene[0].astype(np.float64) + UTM_OFFSET
+    for name in ("g.ply", "g.pcd", "g.xyz"):
+        path = tmp_path / name
+        sgd_icp.write_points(path, source)
+        back = sgd_icp.read_points(path)
+        assert back.dtype == np.float64, name
+        np.testing.assert_allclose(back, source, rtol=0, atol=1e-4)
+    index = sgd_icp.ReferenceIndex(source)
+    np.testing.assert_allclose(index.points, source, rtol=0, atol=1e-4)
