@@ -37,7 +37,7 @@ std::string format_number(double value) {
   return out.str();
 }
 
-void validate(const NeighborhoodSettings& settings) {
+void check_neighborhood(const NeighborhoodSettings& settings) {
   if (settings.k < kMinNeighbors || settings.k > kMaxNeighbors) {
     throw InvalidSettingsError(
         "neighbourhood size k must be in [3, 1000] (it includes the "
@@ -266,29 +266,33 @@ void validate_attributes(const PointCloud& cloud) {
 
 }  // namespace
 
+void NeighborhoodSettings::validate() const {
+  check_neighborhood(*this);
+}
+
 void estimate_covariances(PointCloud& cloud, const NeighborhoodSettings& settings) {
-  validate(settings);
+  check_neighborhood(settings);
   validate(cloud);
   estimate(cloud, build_index(cloud), settings, true);
 }
 
 void estimate_covariances(PointCloud& cloud, const ReferenceIndex& index,
                           const NeighborhoodSettings& settings) {
-  validate(settings);
+  check_neighborhood(settings);
   validate(cloud);
   validate_index(cloud, index);
   estimate(cloud, index, settings, true);
 }
 
 void estimate_normals(PointCloud& cloud, const NeighborhoodSettings& settings) {
-  validate(settings);
+  check_neighborhood(settings);
   validate(cloud);
   estimate(cloud, build_index(cloud), settings, false);
 }
 
 void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
                       const NeighborhoodSettings& settings) {
-  validate(settings);
+  check_neighborhood(settings);
   validate(cloud);
   validate_index(cloud, index);
   estimate(cloud, index, settings, false);

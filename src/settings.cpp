@@ -496,6 +496,7 @@ const Setting<BatchSettings>* find_batch_setting(std::string_view name) {
 
 void SgdSettings::validate(SettingNames names) const {
   check_table(*this, sgd_settings_table(), names);
+  neighborhood.validate();  // epsilon and the viewpoint are not in the table
   const double pairs = static_cast<double>(batch_size) * static_cast<double>(convergence.window);
   if (pairs > kMaxWindowPairs) {
     const auto* b = find_sgd_setting("batch-size");
@@ -509,6 +510,7 @@ void SgdSettings::validate(SettingNames names) const {
 
 void BatchSettings::validate(SettingNames names) const {
   check_table(*this, batch_settings_table(), names);
+  neighborhood.validate();  // epsilon and the viewpoint are not in the table
 }
 
 void OptimizerSettings::validate() const {

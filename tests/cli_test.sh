@@ -328,6 +328,22 @@ expect_error "--ground-truth with 5 numbers names --ground-truth" '^sgdicp: erro
   register "$MOVED" "$REF" --ground-truth "1 2 3 4 5"
 expect_error "--init with an inline NaN is not a missing file" '^sgdicp: error: --init: .*non-finite' \
   register "$MOVED" "$REF" --init "nan 0 0 0 0 1 0 0 0 0 1 0"
+# NaN and infinity: every kind of floating option (a real, a scaled and a metric distance, a
+# batch setting, a preprocessing option) and an --init file holding one are refused by name.
+for bad in nan inf -inf; do
+  for spec in "--learning-rate" "--max-distance" "--kernel-scale" "--trim" \
+    "--translation-tolerance" "--voxel-size" "--random-ratio"; do
+    expect_error "$spec $bad" "^sgdicp: error: $spec $bad( scaled)?: must be in" \
+      register "$MOVED" "$REF" "$spec" "$bad"
+  done
+  expect_error "--max-distance $bad in metres" "^sgdicp: error: --max-distance $bad m: must be in" \
+    register "$MOVED" "$REF" --max-distance "$bad" --max-distance-unit m
+  expect_error "--damping $bad (icp-plane)" "^sgdicp: error: --damping $bad: must be in" \
+    register "$MOVED" "$REF" --method icp-plane --damping "$bad"
+  printf '1 0 0 0\n0 1 0 %s\n0 0 1 0\n0 0 0 1\n' "$bad" >"$tmp/init_$bad.txt"
+  expect_error "--init file with $bad" '^sgdicp: error: --init: .*non-finite' \
+    register "$MOVED" "$REF" --init "$tmp/init_$bad.txt"
+done
 expect_error "--init with a directory" '--init .*: a directory, not a transform file' \
   register "$MOVED" "$REF" --init "$tmp"
 expect_error "--ground-truth with a directory" '--ground-truth .*: a directory' \

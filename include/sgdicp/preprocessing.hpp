@@ -29,6 +29,11 @@ struct NeighborhoodSettings {
   double epsilon = 1e-3;
   /// Normals are flipped to face this point (metres): n.dot(viewpoint - p) >= 0.
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
+
+  /// Throws InvalidSettingsError for k, num_threads or epsilon out of range or a non-finite
+  /// viewpoint. SgdSettings::validate() and BatchSettings::validate() call it.
+  void validate() const;
+
   bool operator==(const NeighborhoodSettings&) const = default;
 };
 
