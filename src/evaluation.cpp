@@ -78,6 +78,18 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
       result.inliers > 0 ? std::sqrt(sum_sq / static_cast<double>(result.inliers)) : 0.0;
 
   if (!settings.check_degeneracy) return;
+  // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
+  // draws its own sample then.
+  const std::size_t wanted = std::min(n, settings.degeneracy_pairs);
+  if (samples < wanted) {
+    pairs.clear();
+    for (std::size_t k = 0; k < wanted; ++k) {
+      const Eigen::Vector3f moved = r * source.points[sample_index(k, wanted, n)] + t;
+      if (const auto nn = reference.nearest(moved, max_sq)) {
+        pairs.push_back({moved.cast<double>(), nn->index});
+      }
+    }
+  }
   if (pairs.size() < 6) {
     result.degenerate = true;
     result.constraint_ratio = 0.0;

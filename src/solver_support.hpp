@@ -94,6 +94,21 @@ inline void check_pair(const ReferenceIndex& reference, CostType cost,
   check_reference_prepared(reference, cost);
 }
 
+/// The bulk of a cloud must lie within 1e9 m of its origin (no place on Earth is farther from a
+/// georeferencing origin): beyond, squared distances in the single-precision KD-tree overflow
+/// and every pair would be lost without a word. A few far points are fine (robust scaling).
+inline void check_within_float_range(const BoundingBox& box, const char* which) {
+  constexpr double kLargest_m = 1e9;
+  if (box.valid() && box.min.cwiseAbs().maxCoeff() <= kLargest_m &&
+      box.max.cwiseAbs().maxCoeff() <= kLargest_m) {
+    return;
+  }
+  throw InvalidInputError(std::string("the ") + which +
+                          " cloud lies beyond 1e9 m from its origin (single-precision distances "
+                          "would overflow): give the points in metres, near their frame's origin "
+                          "or with an origin (PointCloud::origin_m)");
+}
+
 /// The paper's map of both clouds into the unit cube (scaling.hpp), from the bounding boxes of
 /// every point or of the bulk of each cloud; the far points left out go into result.far_points.
 [[nodiscard]] inline UnitCubeScaling scaling_of(const PointCloud& source,
@@ -101,11 +116,16 @@ inline void check_pair(const ReferenceIndex& reference, CostType cost,
                                                 ScalingOrigin origin, bool robust,
                                                 RegistrationResult& result) {
   if (!robust) {
-    return UnitCubeScaling::from_boxes(BoundingBox::of(source), reference.bounding_box(), origin);
+    const BoundingBox source_box = BoundingBox::of(source);
+    check_within_float_range(source_box, "source");
+    check_within_float_range(reference.bounding_box(), "reference");
+    return UnitCubeScaling::from_boxes(source_box, reference.bounding_box(), origin);
   }
   const ScalingBox source_box = bulk_bounding_box(source);
   const ScalingBox& reference_box = reference.bulk_bounding_box();
   result.far_points = source_box.far_points + reference_box.far_points;
+  check_within_float_range(source_box.box, "source");
+  check_within_float_range(reference_box.box, "reference");
   return UnitCubeScaling::from_boxes(source_box.box, reference_box.box, origin);
 }
 

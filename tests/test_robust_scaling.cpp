@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "sgdicp/error.hpp"
 #include "sgdicp/io.hpp"
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/pairs.hpp"
@@ -115,6 +116,30 @@ TEST(RobustScaling, KittiScanWithAFarReturn) {
     EXPECT_LT(rotation_error_geodesic(r.T_reference_source, pair.T_reference_source_gt), 0.2 * kDeg)
         << far;
   }
+}
+
+// A whole scene beyond 1e9 m (a cloud scaled by 1e30) cannot be paired in single precision: a
+// clear error, not "degenerate" or a silent identity. A single far point stays fine (above).
+TEST(RobustScaling, ASceneBeyondTheFloatRangeIsRejected) {
+  PointCloud source = synthetic_scene(45, 2000);
+  for (auto& p : source.points) p *= 1e30F;
+  const PointCloud reference = source;
+  EXPECT_THROW((void)align(source, reference), InvalidInputError);
+  EXPECT_THROW((void)align(source, reference, SgdSettings::paper()), InvalidInputError);
+}
+
+// One evaluation point does not decide the geometry: the degeneracy check samples on its own.
+TEST(RobustScaling, OneEvaluationPointDoesNotMakeTheSceneDegenerate) {
+  const Eigen::Matrix4d T_gt = make_transform(2 * kDeg, 1 * kDeg, 5 * kDeg, {0.05, 0.02, 0.0});
+  const PointCloud source = synthetic_scene(46);
+  const PointCloud reference = transformed(synthetic_scene(47), T_gt);
+  SgdSettings settings;
+  settings.evaluation_points = 1;
+  const RegistrationResult r = align(source, reference, settings);
+  EXPECT_EQ(r.evaluated_points, 1U);
+  EXPECT_FALSE(r.degenerate) << r.message;
+  const double usual = align(source, reference).constraint_ratio;
+  EXPECT_NEAR(r.constraint_ratio, usual, 0.2 * usual);
 }
 
 }  // namespace
