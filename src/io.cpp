@@ -93,10 +93,6 @@ void append_little_endian(std::string& out, T value) {
   out.append(raw.data(), raw.size());
 }
 
-float to_float(double value) {
-  return to_float_saturating(value);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Text helpers
 
@@ -135,36 +131,60 @@ std::vector<std::string_view> split_whitespace(std::string_view line) {
   return tokens;
 }
 
-// A whole token as a float, correctly rounded from the decimal text. Accepts a leading '+',
-// "nan" and "inf"; values beyond the float range become +-inf or +-0 (as strtof would).
-bool parse_float(std::string_view token, float& out) {
+// Decimal exponent of the leading significant digit of a number's text (sign stripped),
+// saturated: it tells overflow from underflow when std::from_chars reports out of range.
+// "1000e-1" -> 2, "0.001" -> -3.
+std::int64_t decimal_magnitude(std::string_view text) {
+  constexpr std::int64_t kSaturated = std::int64_t{1} << 40;
+  std::int64_t magnitude = 0;
+  bool seen_digit = false;
+  bool in_fraction = false;
+  std::size_t i = 0;
+  for (; i < text.size() && text[i] != 'e' && text[i] != 'E'; ++i) {
+    if (text[i] == '.') {
+      in_fraction = true;
+    } else if (in_fraction) {
+      if (!seen_digit) --magnitude;
+      seen_digit = seen_digit || text[i] != '0';
+    } else if (seen_digit || text[i] != '0') {
+      if (seen_digit) magnitude = std::min(magnitude + 1, kSaturated);
+      seen_digit = true;
+    }
+  }
+  std::int64_t exponent = 0;
+  const bool negative = i + 1 < text.size() && text[i + 1] == '-';
+  for (i += (i + 1 < text.size() && (text[i + 1] == '-' || text[i + 1] == '+')) ? 2 : 1;
+       i < text.size(); ++i) {
+    exponent = std::min(exponent * 10 + (text[i] - '0'), kSaturated);
+  }
+  return magnitude + (negative ? -exponent : exponent);
+}
+
+// A whole token as a double, correctly rounded (std::from_chars: locale-independent, exact for
+// any mantissa length). Accepts one leading '+', "nan", "inf" and "infinity"; decimal only, so
+// hex floats and tokens such as "0.0.5" or "+-1" are not numbers. Beyond the double range a
+// value becomes +-inf (dropped by the readers as non-finite) or +-0 (after the subnormals).
+bool parse_number(std::string_view token, double& out) {
   const char* first = token.data();
   const char* const last = first + token.size();
   if (first != last && *first == '+') {
     ++first;  // std::from_chars rejects an explicit plus sign
-    if (first != last && *first == '-') return false;
+    if (first != last && (*first == '-' || *first == '+')) return false;
   }
   if (first == last) return false;
-  float value = 0.0f;
+  double value = 0.0;
   const auto [end, error] = std::from_chars(first, last, value);
-  if (end != last || (error != std::errc() && error != std::errc::result_out_of_range)) {
-    return false;
-  }
+  if (end != last) return false;
   if (error == std::errc()) {
     out = value;
     return true;
   }
-  double wide = 0.0;
-  if (const auto r = std::from_chars(first, last, wide); r.ec == std::errc()) {
-    out = to_float(wide);
-    return true;
-  }
-  // Beyond double as well: the sign of the exponent tells overflow from underflow.
+  if (error != std::errc::result_out_of_range) return false;
   const bool negative = *first == '-';
-  const std::string_view text(first, static_cast<std::size_t>(last - first));
-  const std::size_t e = text.find_first_of("eE");
-  const bool underflow = e != std::string_view::npos && e + 1 < text.size() && text[e + 1] == '-';
-  const float magnitude = underflow ? 0.0f : std::numeric_limits<float>::infinity();
+  const std::string_view text(first + (negative ? 1 : 0),
+                              static_cast<std::size_t>(last - first) - (negative ? 1 : 0));
+  const double magnitude =
+      decimal_magnitude(text) > 0 ? std::numeric_limits<double>::infinity() : 0.0;
   out = negative ? -magnitude : magnitude;
   return true;
 }
@@ -270,19 +290,35 @@ void write_whole_file(const fs::path& path, const std::string& name, std::string
 // ---------------------------------------------------------------------------------------------
 // Output of the readers
 
-void add_point(ReadResult& result, float x, float y, float z) {
-  if (std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
-    result.cloud.points.emplace_back(x, y, z);
-  } else {
-    ++result.non_finite_dropped;
-  }
-}
+// Every reader hands each parsed point here, in double: the one place where coordinates are
+// converted to the float storage and non-finite points are dropped and counted.
+class PointSink {
+ public:
+  explicit PointSink(ReadResult& result) : result_(result) {}
 
-// Reserves for a declared count, but never more than the data could hold: a header can lie.
-void reserve_points(ReadResult& result, std::uint64_t declared, std::size_t upper_bound) {
-  result.cloud.points.reserve(
-      static_cast<std::size_t>(std::min<std::uint64_t>(declared, upper_bound)));
-}
+  void add(double x, double y, double z) {
+    // Beyond the float range counts as non-finite too: storage cannot hold it.
+    const float xf = to_float_saturating(x);
+    const float yf = to_float_saturating(y);
+    const float zf = to_float_saturating(z);
+    if (std::isfinite(xf) && std::isfinite(yf) && std::isfinite(zf)) {
+      result_.cloud.points.emplace_back(xf, yf, zf);
+    } else {
+      ++result_.non_finite_dropped;
+    }
+  }
+
+  // Reserves for a declared count, but never more than the data could hold: a header can lie.
+  void reserve(std::uint64_t declared, std::size_t upper_bound) {
+    result_.cloud.points.reserve(
+        static_cast<std::size_t>(std::min<std::uint64_t>(declared, upper_bound)));
+  }
+
+  [[nodiscard]] ReadResult& result() { return result_; }
+
+ private:
+  ReadResult& result_;
+};
 
 // Smallest text for one point: "0 0 0\n".
 constexpr std::size_t kMinTextPointBytes = 6;
@@ -399,7 +435,7 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
     } else if (key == "VIEWPOINT") {
       expect_values(7);
       for (const auto v : values) {
-        if (float f = 0.0f; !parse_float(v, f)) {
+        if (double f = 0.0; !parse_number(v, f)) {
           fail_line(name, at, "VIEWPOINT value " + shown(v) + " is not a number");
         }
       }
@@ -475,7 +511,7 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
 }
 
 void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor& cursor,
-                    ReadResult& result) {
+                    PointSink& sink) {
   // Column of x, y and z on a line, where fields with COUNT > 1 take several columns.
   std::array<std::uint64_t, 3> column{};
   std::uint64_t columns = 0;
@@ -488,7 +524,7 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
     columns = *next;
   }
 
-  reserve_points(result, header.points, cursor.remaining() / kMinTextPointBytes);
+  sink.reserve(header.points, cursor.remaining() / kMinTextPointBytes);
   std::uint64_t read = 0;
   std::string_view line;
   while (read < header.points) {
@@ -515,13 +551,13 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
       fail_line(name, cursor.line(),
                 "expected " + std::to_string(columns) + " values, got " + std::to_string(count));
     }
-    std::array<float, 3> p{};
+    std::array<double, 3> p{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      if (!parse_float(xyz[axis], p[axis])) {
+      if (!parse_number(xyz[axis], p[axis])) {
         fail_line(name, cursor.line(), shown(xyz[axis]) + " is not a number");
       }
     }
-    add_point(result, p[0], p[1], p[2]);
+    sink.add(p[0], p[1], p[2]);
     ++read;
   }
   while (cursor.next_line(line)) {
@@ -532,8 +568,8 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
   }
 }
 
-float load_pcd_coordinate(const char* p, std::size_t size) {
-  return size == 4 ? load<float>(p, false) : to_float(load<double>(p, false));
+double load_pcd_coordinate(const char* p, std::size_t size) {
+  return size == 4 ? load<float>(p, false) : load<double>(p, false);
 }
 
 // Byte layout of one point: offset of each field and the total size.
@@ -555,7 +591,7 @@ PcdLayout pcd_layout(const std::string& name, const PcdHeader& header) {
 }
 
 void read_pcd_binary(const std::string& name, const PcdHeader& header, std::string_view data,
-                     ReadResult& result) {
+                     PointSink& sink) {
   const PcdLayout layout = pcd_layout(name, header);
   const std::size_t available = data.size() - header.data_offset;
   const auto need = checked_mul(header.points, layout.point_size);
@@ -573,17 +609,17 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
     size[axis] = header.fields[header.xyz[axis]].size;
   }
   const auto n = static_cast<std::size_t>(header.points);
-  result.cloud.points.reserve(n);
+  sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
     const char* const point = base + i * step;
-    add_point(result, load_pcd_coordinate(point + offset[0], size[0]),
-              load_pcd_coordinate(point + offset[1], size[1]),
-              load_pcd_coordinate(point + offset[2], size[2]));
+    sink.add(load_pcd_coordinate(point + offset[0], size[0]),
+             load_pcd_coordinate(point + offset[1], size[1]),
+             load_pcd_coordinate(point + offset[2], size[2]));
   }
 }
 
 void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::string_view data,
-                         ReadResult& result) {
+                         PointSink& sink) {
   // LZF emits at most 264 bytes per 3-byte back reference; a larger claimed ratio is a lie.
   constexpr std::uint64_t kMaxLzfRatio = 100;
   const PcdLayout layout = pcd_layout(name, header);
@@ -630,27 +666,27 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
     column[axis] = raw.data() + n * static_cast<std::size_t>(layout.field_offset[field]);
     size[axis] = header.fields[field].size;
   }
-  result.cloud.points.reserve(n);
+  sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
-    add_point(result, load_pcd_coordinate(column[0] + i * size[0], size[0]),
-              load_pcd_coordinate(column[1] + i * size[1], size[1]),
-              load_pcd_coordinate(column[2] + i * size[2], size[2]));
+    sink.add(load_pcd_coordinate(column[0] + i * size[0], size[0]),
+             load_pcd_coordinate(column[1] + i * size[1], size[1]),
+             load_pcd_coordinate(column[2] + i * size[2], size[2]));
   }
 }
 
-void read_pcd(const std::string& name, std::string_view data, ReadResult& result) {
+void read_pcd(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   const PcdHeader header = parse_pcd_header(name, cursor);
-  result.points_in_file = static_cast<std::size_t>(header.points);
+  sink.result().points_in_file = static_cast<std::size_t>(header.points);
   switch (header.data) {
     case PcdData::ascii:
-      read_pcd_ascii(name, header, cursor, result);
+      read_pcd_ascii(name, header, cursor, sink);
       break;
     case PcdData::binary:
-      read_pcd_binary(name, header, data, result);
+      read_pcd_binary(name, header, data, sink);
       break;
     case PcdData::binary_compressed:
-      read_pcd_compressed(name, header, data, result);
+      read_pcd_compressed(name, header, data, sink);
       break;
   }
 }
@@ -724,11 +760,6 @@ double ply_value(PlyType type, const char* p, bool big_endian) {
       return load<double>(p, big_endian);
   }
   return 0.0;
-}
-
-float ply_coordinate(PlyType type, const char* p, bool big_endian) {
-  return type == PlyType::f32 ? load<float>(p, big_endian)
-                              : to_float(ply_value(type, p, big_endian));
 }
 
 struct PlyProperty {
@@ -848,13 +879,13 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
 }
 
 void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor& cursor,
-                    ReadResult& result) {
+                    PointSink& sink) {
   std::string_view token;
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
     const PlyElement& element = header.elements[e];
     const bool is_vertex = e == header.vertex;
     if (element.properties.empty()) continue;  // records without properties take no text
-    if (is_vertex) reserve_points(result, element.count, cursor.remaining() / kMinTextPointBytes);
+    if (is_vertex) sink.reserve(element.count, cursor.remaining() / kMinTextPointBytes);
     for (std::uint64_t r = 0; r < element.count; ++r) {
       const auto next = [&]() {
         if (!cursor.next_token(token)) {
@@ -864,7 +895,7 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
         }
         return token;
       };
-      std::array<float, 3> p{};
+      std::array<double, 3> p{};
       for (std::size_t k = 0; k < element.properties.size(); ++k) {
         const PlyProperty& property = element.properties[k];
         const std::string_view value = next();
@@ -877,14 +908,14 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
           for (std::uint64_t i = 0; i < length; ++i) next();
         } else if (is_vertex) {
           for (std::size_t axis = 0; axis < 3; ++axis) {
-            if (header.xyz[axis] == k && !parse_float(value, p[axis])) {
+            if (header.xyz[axis] == k && !parse_number(value, p[axis])) {
               fail_line(name, cursor.line(),
                         shown(value) + " is not a number (property '" + property.name + "')");
             }
           }
         }
       }
-      if (is_vertex) add_point(result, p[0], p[1], p[2]);
+      if (is_vertex) sink.add(p[0], p[1], p[2]);
     }
   }
   if (cursor.next_token(token)) {
@@ -903,7 +934,7 @@ std::optional<std::size_t> ply_fixed_stride(const PlyElement& element) {
 }
 
 void read_ply_binary(const std::string& name, const PlyHeader& header, std::string_view data,
-                     ReadResult& result) {
+                     PointSink& sink) {
   const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
   std::size_t pos = header.data_offset;
   for (std::size_t e = 0; e < header.elements.size(); ++e) {
@@ -931,12 +962,12 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
           }
         }
         const auto n = static_cast<std::size_t>(element.count);
-        result.cloud.points.reserve(n);
+        sink.reserve(n, n);
         for (std::size_t i = 0; i < n; ++i) {
           const char* const record = data.data() + pos + i * *stride;
-          add_point(result, ply_coordinate(xyz_type[0], record + xyz_offset[0], big_endian),
-                    ply_coordinate(xyz_type[1], record + xyz_offset[1], big_endian),
-                    ply_coordinate(xyz_type[2], record + xyz_offset[2], big_endian));
+          sink.add(ply_value(xyz_type[0], record + xyz_offset[0], big_endian),
+                   ply_value(xyz_type[1], record + xyz_offset[1], big_endian),
+                   ply_value(xyz_type[2], record + xyz_offset[2], big_endian));
         }
       }
       pos += static_cast<std::size_t>(*need);
@@ -944,7 +975,7 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
     }
 
     // Records with lists: walk them one property at a time.
-    if (is_vertex) reserve_points(result, element.count, (data.size() - pos) / 3);
+    if (is_vertex) sink.reserve(element.count, (data.size() - pos) / 3);
     for (std::uint64_t r = 0; r < element.count; ++r) {
       const auto take = [&](std::uint64_t bytes) {
         const std::size_t start = pos;
@@ -974,22 +1005,22 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
         take(bytes ? *bytes : std::numeric_limits<std::uint64_t>::max());
       }
       if (is_vertex) {
-        add_point(result, ply_coordinate(xyz_type[0], data.data() + xyz_offset[0], big_endian),
-                  ply_coordinate(xyz_type[1], data.data() + xyz_offset[1], big_endian),
-                  ply_coordinate(xyz_type[2], data.data() + xyz_offset[2], big_endian));
+        sink.add(ply_value(xyz_type[0], data.data() + xyz_offset[0], big_endian),
+                 ply_value(xyz_type[1], data.data() + xyz_offset[1], big_endian),
+                 ply_value(xyz_type[2], data.data() + xyz_offset[2], big_endian));
       }
     }
   }
 }
 
-void read_ply(const std::string& name, std::string_view data, ReadResult& result) {
+void read_ply(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   const PlyHeader header = parse_ply_header(name, cursor);
-  result.points_in_file = static_cast<std::size_t>(header.elements[header.vertex].count);
+  sink.result().points_in_file = static_cast<std::size_t>(header.elements[header.vertex].count);
   if (header.encoding == PlyEncoding::ascii) {
-    read_ply_ascii(name, header, cursor, result);
+    read_ply_ascii(name, header, cursor, sink);
   } else {
-    read_ply_binary(name, header, data, result);
+    read_ply_binary(name, header, data, sink);
   }
 }
 
@@ -997,7 +1028,7 @@ void read_ply(const std::string& name, std::string_view data, ReadResult& result
 // Headerless float32 records (KITTI .bin, .f32)
 
 void read_float_records(const std::string& name, std::string_view data, std::size_t floats,
-                        const std::string& layout, ReadResult& result) {
+                        const std::string& layout, PointSink& sink) {
   const std::size_t record = floats * sizeof(float);
   if (data.size() % record != 0) {
     fail_byte(name, data.size() - data.size() % record,
@@ -1005,11 +1036,11 @@ void read_float_records(const std::string& name, std::string_view data, std::siz
                   " bytes is not a multiple of " + std::to_string(record) + " (" + layout + ")");
   }
   const std::size_t n = data.size() / record;
-  result.points_in_file = n;
-  result.cloud.points.reserve(n);
+  sink.result().points_in_file = n;
+  sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
     const char* const p = data.data() + i * record;
-    add_point(result, load<float>(p, false), load<float>(p + 4, false), load<float>(p + 8, false));
+    sink.add(load<float>(p, false), load<float>(p + 4, false), load<float>(p + 8, false));
   }
 }
 
@@ -1044,11 +1075,11 @@ std::string column_name(std::string_view field) {
   return lowercase(field);
 }
 
-void read_xyz(const std::string& name, std::string_view data, ReadResult& result) {
+void read_xyz(const std::string& name, std::string_view data, PointSink& sink) {
   std::size_t start = 0;
   if (data.starts_with("\xEF\xBB\xBF")) start = 3;  // UTF-8 byte order mark
   TextCursor cursor(data, start, 1);
-  reserve_points(result, kNoLimit, data.size() / 32);  // a typical line is longer than 32 bytes
+  sink.reserve(kNoLimit, data.size() / 32);  // a typical line is longer than 32 bytes
 
   std::array<std::size_t, 3> column = {0, 1, 2};
   bool header_allowed = true;
@@ -1068,7 +1099,7 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
       return found < needed;
     });
 
-    std::array<float, 3> p{};
+    std::array<double, 3> p{};
     if (header_allowed) {
       header_allowed = false;
       std::string_view first;
@@ -1076,7 +1107,7 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
         first = field;
         return false;
       });
-      if (float ignored = 0.0f; !parse_float(first, ignored)) {
+      if (double ignored = 0.0; !parse_number(first, ignored)) {
         // A header line: use its x, y, z columns when it names all three.
         std::vector<std::string> names;
         for_each_xyz_field(content, [&](std::size_t, std::string_view field) {
@@ -1097,7 +1128,7 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
     }
     // A word where a number belongs says more than the field count, so it is reported first.
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      if (column[axis] < found && !parse_float(xyz[axis], p[axis])) {
+      if (column[axis] < found && !parse_number(xyz[axis], p[axis])) {
         fail_line(name, cursor.line(),
                   shown(xyz[axis]) + " is not a number (column " +
                       std::to_string(column[axis] + 1) + ")");
@@ -1109,15 +1140,15 @@ void read_xyz(const std::string& name, std::string_view data, ReadResult& result
                             : "expected at least " + std::to_string(needed) + " columns, got " +
                                   std::to_string(found));
     }
-    add_point(result, p[0], p[1], p[2]);
-    ++result.points_in_file;
+    sink.add(p[0], p[1], p[2]);
+    ++sink.result().points_in_file;
   }
 }
 
 // ---------------------------------------------------------------------------------------------
 // Legacy ASCII VTK
 
-void read_vtk(const std::string& name, std::string_view data, ReadResult& result) {
+void read_vtk(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   std::string_view line;
   constexpr std::string_view kMagic = "# vtk DataFile Version";
@@ -1157,10 +1188,10 @@ void read_vtk(const std::string& name, std::string_view data, ReadResult& result
     fail_line(name, cursor.line(), "unsupported POINTS type " + shown(type) + " (float or double)");
   }
 
-  result.points_in_file = static_cast<std::size_t>(count);
-  reserve_points(result, count, cursor.remaining() / kMinTextPointBytes);
+  sink.result().points_in_file = static_cast<std::size_t>(count);
+  sink.reserve(count, cursor.remaining() / kMinTextPointBytes);
   for (std::uint64_t i = 0; i < count; ++i) {
-    std::array<float, 3> p{};
+    std::array<double, 3> p{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       if (!cursor.next_token(token)) {
         fail_line(name, cursor.line(),
@@ -1168,11 +1199,11 @@ void read_vtk(const std::string& name, std::string_view data, ReadResult& result
                       std::to_string(count * 3) + " numbers), file ends after " +
                       std::to_string(i * 3 + axis) + " numbers");
       }
-      if (!parse_float(token, p[axis])) {
+      if (!parse_number(token, p[axis])) {
         fail_line(name, cursor.line(), shown(token) + " is not a number");
       }
     }
-    add_point(result, p[0], p[1], p[2]);
+    sink.add(p[0], p[1], p[2]);
   }
 }
 
@@ -1235,6 +1266,37 @@ std::string pcd_text(const PointCloud& cloud, Encoding encoding) {
   return out;
 }
 
+// The one parser behind both entry points: the bytes of a whole file in a known format.
+ReadResult parse_point_cloud(const std::string& name, std::string_view data, FileFormat format) {
+  if (data.empty()) fail_byte(name, 0, "empty file");
+  ReadResult result;
+  result.format = format;
+  PointSink sink(result);
+  switch (format) {
+    case FileFormat::pcd:
+      read_pcd(name, data, sink);
+      break;
+    case FileFormat::ply:
+      read_ply(name, data, sink);
+      break;
+    case FileFormat::kitti_bin:
+      read_float_records(name, data, 4, "float32 x y z intensity", sink);
+      break;
+    case FileFormat::xyz:
+      read_xyz(name, data, sink);
+      break;
+    case FileFormat::vtk:
+      read_vtk(name, data, sink);
+      break;
+    case FileFormat::f32:
+      read_float_records(name, data, 3, "float32 x y z", sink);
+      break;
+    case FileFormat::automatic:
+      break;  // resolved by the callers
+  }
+  return result;
+}
+
 }  // namespace
 
 std::string to_string(FileFormat format) {
@@ -1276,34 +1338,18 @@ ReadResult read_point_cloud(const std::filesystem::path& path, FileFormat format
       format == FileFormat::automatic ? format_from_extension(path) : format;
   const std::string name = path.string();
   const std::vector<char> bytes = read_whole_file(path, name);
-  if (bytes.empty()) fail_byte(name, 0, "empty file");
-  const std::string_view data(bytes.data(), bytes.size());
+  return parse_point_cloud(name, std::string_view(bytes.data(), bytes.size()), resolved);
+}
 
-  ReadResult result;
-  result.format = resolved;
-  switch (resolved) {
-    case FileFormat::pcd:
-      read_pcd(name, data, result);
-      break;
-    case FileFormat::ply:
-      read_ply(name, data, result);
-      break;
-    case FileFormat::kitti_bin:
-      read_float_records(name, data, 4, "float32 x y z intensity", result);
-      break;
-    case FileFormat::xyz:
-      read_xyz(name, data, result);
-      break;
-    case FileFormat::vtk:
-      read_vtk(name, data, result);
-      break;
-    case FileFormat::f32:
-      read_float_records(name, data, 3, "float32 x y z", result);
-      break;
-    case FileFormat::automatic:
-      break;  // resolved above
+ReadResult read_point_cloud_from_memory(std::span<const std::byte> bytes, FileFormat format,
+                                        std::string_view name) {
+  if (format == FileFormat::automatic) {
+    throw FormatError(std::string(name) +
+                      ": reading from memory needs an explicit format (no extension to go by)");
   }
-  return result;
+  return parse_point_cloud(
+      std::string(name),
+      std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), format);
 }
 
 void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud,

@@ -8,13 +8,16 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <initializer_list>
 #include <iterator>
 #include <limits>
 #include <ostream>
 #include <random>
+#include <span>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -1031,6 +1034,130 @@ TEST_F(IoTest, RealDataSurvivesARoundTrip) {
       ASSERT_EQ(back.cloud.points[i], r.cloud.points[i]) << name << " point " << i;
     }
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// In-memory entry point: the same parser as the file reader
+
+std::vector<std::byte> file_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::byte> bytes(text.size());
+  std::memcpy(bytes.data(), text.data(), text.size());
+  return bytes;
+}
+
+// The error of one entry point, with the file's name replaced by "<name>".
+std::string error_of(const std::function<ReadResult()>& read, const std::string& name) {
+  try {
+    (void)read();
+  } catch (const FormatError& e) {
+    std::string message = e.what();
+    if (message.starts_with(name)) message.replace(0, name.size(), "<name>");
+    return message;
+  }
+  return "no error";
+}
+
+void expect_memory_reads_like_file(const fs::path& path) {
+  const FileFormat format = format_from_extension(path);
+  const auto bytes = file_bytes(path);
+  const ReadResult from_file = read_point_cloud(path);
+  const ReadResult from_memory = read_point_cloud_from_memory(bytes, format, "mem");
+  EXPECT_EQ(from_memory.format, from_file.format) << path;
+  EXPECT_EQ(from_memory.points_in_file, from_file.points_in_file) << path;
+  EXPECT_EQ(from_memory.non_finite_dropped, from_file.non_finite_dropped) << path;
+  ASSERT_EQ(from_memory.cloud.size(), from_file.cloud.size()) << path;
+  for (std::size_t i = 0; i < from_file.cloud.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(same_bits(from_memory.cloud.points[i][k], from_file.cloud.points[i][k]))
+          << path << " point " << i;
+    }
+  }
+  // A truncated copy fails the same way through both entry points.
+  const std::size_t half = bytes.size() / 2 + 1;
+  const std::span<const std::byte> truncated(bytes.data(), half);
+  const fs::path cut = path.parent_path() / ("cut_" + path.filename().string());
+  {
+    std::ofstream out(cut, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(half));
+  }
+  EXPECT_EQ(error_of([&] { return read_point_cloud_from_memory(truncated, format, "mem"); }, "mem"),
+            error_of([&] { return read_point_cloud(cut); }, cut.string()))
+      << path;
+}
+
+TEST_F(IoTest, MemoryReaderMatchesFileReaderForEveryFormat) {
+  PointCloud cloud = random_cloud(50);
+  cloud.points.emplace_back(kNaN, 1.0f, 2.0f);  // dropped and counted by both
+  write_point_cloud(dir_ / "c.ply", cloud, FileFormat::automatic, Encoding::binary);
+  write_point_cloud(dir_ / "a.ply", cloud, FileFormat::automatic, Encoding::ascii);
+  write_point_cloud(dir_ / "c.pcd", cloud, FileFormat::automatic, Encoding::binary);
+  write_point_cloud(dir_ / "a.pcd", cloud, FileFormat::automatic, Encoding::ascii);
+  write_point_cloud(dir_ / "c.xyz", cloud);
+  Bytes raw;
+  for (const float x : {1.0f, kNaN, 3.0f}) raw.le(x);
+  for (const float y : {10.0f, 20.0f, 30.0f}) raw.le(y);
+  for (const double z : {100.0, 200.0, 1e300}) raw.le(z);
+  const std::string block = lzf_block(raw.str());
+  Bytes pcd;
+  pcd.text(pcd_header("x y z", "4 4 8", "F F F", "1 1 1", 3, 1, "binary_compressed"));
+  pcd.le(static_cast<std::uint32_t>(block.size())).le(static_cast<std::uint32_t>(raw.str().size()));
+  pcd.text(block);
+  write("z.pcd", pcd.str());
+  Bytes be;
+  be.text(
+      "ply\nformat binary_big_endian 1.0\nelement vertex 2\nproperty double x\n"
+      "property double y\nproperty double z\nend_header\n");
+  for (const double v : {1.0, 2.0, 3.0, -4.0, 5.5, 1e-300}) be.be(v);
+  write("be.ply", be.str());
+  Bytes floats;
+  for (int i = 0; i < 24; ++i) floats.le(static_cast<float>(i) * 0.25f);
+  write("k.bin", floats.str());
+  write("k.f32", floats.str());
+  write("v.vtk",
+        "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 2 double\n"
+        "1 2 3\n4.5 -6 7e-3\n");
+  write("t.csv", "x,y,z\n1,2,3\n4,5,6\nnan,1,1\n");
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    if (!entry.path().filename().string().starts_with("cut_")) {
+      expect_memory_reads_like_file(entry.path());
+    }
+  }
+}
+
+TEST(IoMemory, RealDataReadsLikeTheFiles) {
+  for (const char* relative :
+       {"pcl_kinect_frames", "pcl_bunny", "libpointmatcher_car", "kitti_odometry_seq00/velodyne"}) {
+    const fs::path folder = shared(relative);
+    if (!fs::exists(folder)) continue;
+    for (const auto& entry : fs::directory_iterator(folder)) {
+      const std::string name = entry.path().filename().string();
+      if (name == "000000.bin" || name.ends_with(".pcd") || name.ends_with(".vtk") ||
+          name == "car_cloud400.csv") {
+        const auto bytes = file_bytes(entry.path());
+        const ReadResult a = read_point_cloud(entry.path());
+        const ReadResult b = read_point_cloud_from_memory(bytes, a.format, name);
+        ASSERT_EQ(a.cloud.points, b.cloud.points) << entry.path();
+        EXPECT_EQ(a.non_finite_dropped, b.non_finite_dropped);
+      }
+    }
+  }
+}
+
+TEST(IoMemory, NeedsAnExplicitFormatAndNamesTheSource) {
+  const std::string text = "1 2 3\n4 5\n";
+  const auto* data = reinterpret_cast<const std::byte*>(text.data());
+  const std::span<const std::byte> bytes(data, text.size());
+  EXPECT_THROW((void)read_point_cloud_from_memory(bytes, FileFormat::automatic), FormatError);
+  EXPECT_EQ(read_point_cloud_from_memory(bytes.first(6), FileFormat::xyz).cloud.size(), 1u);
+  try {
+    (void)read_point_cloud_from_memory(bytes, FileFormat::xyz, "fuzz input");
+    ADD_FAILURE() << "no error";
+  } catch (const FormatError& e) {
+    EXPECT_TRUE(std::string(e.what()).starts_with("fuzz input: line 2:")) << e.what();
+  }
+  EXPECT_THROW((void)read_point_cloud_from_memory({}, FileFormat::pcd), FormatError);
 }
 
 }  // namespace

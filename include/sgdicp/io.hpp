@@ -11,7 +11,9 @@
 // Points with a non-finite coordinate are dropped and counted, never returned.
 #include <cstddef>
 #include <filesystem>
+#include <span>
 #include <string>
+#include <string_view>
 
 #include "sgdicp/point_cloud.hpp"
 
@@ -43,6 +45,13 @@ struct ReadResult {
 /// Reads the x y z of every point of a file. Throws IoError (cannot open/read) or FormatError.
 [[nodiscard]] ReadResult read_point_cloud(const std::filesystem::path& path,
                                           FileFormat format = FileFormat::automatic);
+
+/// Parses a whole file's bytes held in memory, with the very parser read_point_cloud uses (same
+/// result, same errors); `name` stands for the file in messages. `format` must be explicit:
+/// FileFormat::automatic throws FormatError. The entry point of the fuzz targets.
+[[nodiscard]] ReadResult read_point_cloud_from_memory(std::span<const std::byte> bytes,
+                                                      FileFormat format,
+                                                      std::string_view name = "<memory>");
 
 /// Encoding of the written file (ignored for XYZ, which is always text).
 enum class Encoding { binary, ascii };
