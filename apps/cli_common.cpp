@@ -1,6 +1,6 @@
 #include "cli_common.hpp"
 
-#include <cstdlib>
+#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <string_view>
@@ -25,28 +25,23 @@ PointCloud load_cloud(const std::string& path, const std::string& role, bool ver
 
 namespace {
 
-// Whether text is a list of numbers (nan and inf included) separated by blanks, commas,
-// semicolons or brackets: an inline matrix rather than a file name.
-bool is_number_list(const std::string& text) {
-  std::size_t numbers = 0;
-  std::size_t i = 0;
-  while (i < text.size()) {
-    if (std::string_view(" \t\r\n,;[]").find(text[i]) != std::string_view::npos) {
-      ++i;
-      continue;
-    }
-    const char* begin = text.c_str() + i;
-    char* end = nullptr;
-    (void)std::strtod(begin, &end);
-    if (end == begin) return false;
-    const char next = *end;
-    if (next != '\0' && std::string_view(" \t\r\n,;[]").find(next) == std::string_view::npos) {
-      return false;
-    }
-    i += static_cast<std::size_t>(end - begin);
-    ++numbers;
+// Whether text is meant as an inline matrix rather than a file name: its first token starts
+// like a number (or is nan/inf). Then parse_transform's message says what is wrong with it
+// ("expected a number, got '0.0.5'"), rather than "no such transform file".
+bool looks_like_numbers(const std::string& text) {
+  const std::size_t first = text.find_first_not_of(" \t\r\n,;[");
+  if (first == std::string::npos) return false;
+  const auto digit = [&](std::size_t i) {
+    return i < text.size() && std::isdigit(static_cast<unsigned char>(text[i])) != 0;
+  };
+  const char c = text[first];
+  if (digit(first) || c == '+' || (c == '.' && digit(first + 1)) ||
+      (c == '-' && (digit(first + 1) || text.compare(first + 1, 1, ".") == 0))) {
+    return true;
   }
-  return numbers > 0;
+  std::string word = text.substr(first, 3);
+  for (char& w : word) w = static_cast<char>(std::tolower(static_cast<unsigned char>(w)));
+  return word == "nan" || word == "inf";
 }
 
 }  // namespace
@@ -66,11 +61,16 @@ Eigen::Matrix4d parse_transform_option(const std::string& text, const std::strin
       throw IoError(option + ": " + e.what());
     }
   }
-  if (!is_number_list(text)) {
+  if (!looks_like_numbers(text)) {
     throw IoError(option + " " + text +
                   ": no such transform file (and not 12 or 16 numbers either)");
   }
-  return parse_transform(text, option);
+  try {
+    return parse_transform(text, option);
+  } catch (const FormatError& e) {
+    if (text.find_first_of(" \t\r\n,;") != std::string::npos) throw;
+    throw FormatError(std::string(e.what()) + " (and no transform file of that name)");
+  }
 }
 
 nlohmann::json matrix_to_json(const Eigen::Matrix4d& T) {

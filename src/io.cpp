@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "parse_number.hpp"
 #include "sgdicp/error.hpp"
 
 namespace sgdicp {
@@ -131,68 +132,31 @@ std::vector<std::string_view> split_whitespace(std::string_view line) {
   return tokens;
 }
 
-// Decimal exponent of the leading significant digit of a number's text (sign stripped),
-// saturated: it tells overflow from underflow when std::from_chars reports out of range.
-// "1000e-1" -> 2, "0.001" -> -3.
-std::int64_t decimal_magnitude(std::string_view text) {
-  constexpr std::int64_t kSaturated = std::int64_t{1} << 40;
-  std::int64_t magnitude = 0;
-  bool seen_digit = false;
-  bool in_fraction = false;
-  std::size_t i = 0;
-  for (; i < text.size() && text[i] != 'e' && text[i] != 'E'; ++i) {
-    if (text[i] == '.') {
-      in_fraction = true;
-    } else if (in_fraction) {
-      if (!seen_digit) --magnitude;
-      seen_digit = seen_digit || text[i] != '0';
-    } else if (seen_digit || text[i] != '0') {
-      if (seen_digit) magnitude = std::min(magnitude + 1, kSaturated);
-      seen_digit = true;
-    }
-  }
-  std::int64_t exponent = 0;
-  const bool negative = i + 1 < text.size() && text[i + 1] == '-';
-  for (i += (i + 1 < text.size() && (text[i + 1] == '-' || text[i + 1] == '+')) ? 2 : 1;
-       i < text.size(); ++i) {
-    exponent = std::min(exponent * 10 + (text[i] - '0'), kSaturated);
-  }
-  return magnitude + (negative ? -exponent : exponent);
-}
-
-// A whole token as a double, correctly rounded (std::from_chars: locale-independent, exact for
-// any mantissa length). Accepts one leading '+', "nan", "inf" and "infinity"; decimal only, so
-// hex floats and tokens such as "0.0.5" or "+-1" are not numbers. Beyond the double range a
-// value becomes +-inf (dropped by the readers as non-finite) or +-0 (after the subnormals).
-bool parse_number(std::string_view token, double& out) {
-  const char* first = token.data();
-  const char* const last = first + token.size();
-  if (first != last && *first == '+') {
-    ++first;  // std::from_chars rejects an explicit plus sign
-    if (first != last && (*first == '-' || *first == '+')) return false;
-  }
-  if (first == last) return false;
-  double value = 0.0;
-  const auto [end, error] = std::from_chars(first, last, value);
-  if (end != last) return false;
-  if (error == std::errc()) {
-    out = value;
-    return true;
-  }
-  if (error != std::errc::result_out_of_range) return false;
-  const bool negative = *first == '-';
-  const std::string_view text(first + (negative ? 1 : 0),
-                              static_cast<std::size_t>(last - first) - (negative ? 1 : 0));
-  const double magnitude =
-      decimal_magnitude(text) > 0 ? std::numeric_limits<double>::infinity() : 0.0;
-  out = negative ? -magnitude : magnitude;
-  return true;
-}
-
 bool parse_uint(std::string_view token, std::uint64_t& out) {
   const char* const last = token.data() + token.size();
   const auto [end, error] = std::from_chars(token.data(), last, out);
   return !token.empty() && error == std::errc() && end == last;
+}
+
+// Whether a token is an integer (one optional sign) that fits `bytes` bytes, signed or not:
+// the text of an integer field, where "banana", "1.5" or "300" for a uchar are errors.
+bool is_integer_token(std::string_view token, std::size_t bytes, bool is_signed) {
+  if (token.starts_with('+')) token.remove_prefix(1);
+  if (token.empty() || token.front() == '+') return false;
+  const char* const last = token.data() + token.size();
+  const unsigned bits = static_cast<unsigned>(bytes * 8);
+  if (is_signed) {
+    std::int64_t v = 0;
+    const auto [end, error] = std::from_chars(token.data(), last, v);
+    if (error != std::errc() || end != last) return false;
+    const std::int64_t max =
+        bits >= 64 ? std::numeric_limits<std::int64_t>::max() : (std::int64_t{1} << (bits - 1)) - 1;
+    return v <= max && v >= -max - 1;
+  }
+  std::uint64_t v = 0;
+  const auto [end, error] = std::from_chars(token.data(), last, v);
+  if (error != std::errc() || end != last) return false;
+  return bits >= 64 || v <= (std::uint64_t{1} << bits) - 1;
 }
 
 // Walks text by lines or by whitespace-separated tokens and keeps the line number for messages.
@@ -248,18 +212,49 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
+std::string limit_text(std::uint64_t bytes) {
+  return std::to_string(bytes) + " bytes = " + std::to_string(bytes >> 30) + " GiB";
+}
+
+// Only regular files: a device or FIFO has no size to check, and /dev/zero never ends.
+void check_regular_file(const fs::path& path, const std::string& name) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || status.type() == fs::file_type::regular) return;  // missing: fopen says why
+  if (status.type() == fs::file_type::directory) {
+    throw IoError(name + ": cannot read: " + system_message(EISDIR));
+  }
+  const char* kind = status.type() == fs::file_type::character ? "a character device"
+                     : status.type() == fs::file_type::block   ? "a block device"
+                     : status.type() == fs::file_type::fifo    ? "a FIFO"
+                     : status.type() == fs::file_type::socket  ? "a socket"
+                                                               : "not a regular file";
+  throw IoError(name + ": " + kind +
+                " (only regular files are read, so that their size bounds what is read)");
+}
+
 std::vector<char> read_whole_file(const fs::path& path, const std::string& name) {
+  check_regular_file(path, name);
   errno = 0;
   const FilePtr file(std::fopen(path.string().c_str(), "rb"));
   if (!file) throw IoError(name + ": cannot open: " + system_message(errno));
   std::error_code size_error;
   const auto expected = fs::file_size(path, size_error);
-  // One byte more than expected so that the end of file is seen by the first read.
-  std::vector<char> bytes(size_error ? std::size_t{1} << 16
-                                     : static_cast<std::size_t>(expected) + 1);
+  if (size_error) throw IoError(name + ": cannot read the size: " + size_error.message());
+  const auto too_large = [&]() {
+    return IoError(name + ": larger than the largest file read (" + limit_text(kMaxFileBytes) +
+                   ")");
+  };
+  if (expected > kMaxFileBytes) throw too_large();
+  // One byte more than expected so that the end of file is seen by the first read; a file that
+  // grows while it is read is still bounded by kMaxFileBytes.
+  std::vector<char> bytes(static_cast<std::size_t>(expected) + 1);
   std::size_t used = 0;
   for (;;) {
-    if (used == bytes.size()) bytes.resize(bytes.size() * 2);
+    if (used == bytes.size()) {
+      if (used > kMaxFileBytes) throw too_large();
+      bytes.resize(std::min<std::size_t>(bytes.size() * 2, kMaxFileBytes + 1));
+    }
     errno = 0;
     const std::size_t got = std::fread(bytes.data() + used, 1, bytes.size() - used, file.get());
     used += got;
@@ -294,9 +289,13 @@ void write_whole_file(const fs::path& path, const std::string& name, std::string
 // converted to the float storage and non-finite points are dropped and counted.
 class PointSink {
  public:
-  explicit PointSink(ReadResult& result) : result_(result) {}
+  PointSink(const std::string& name, ReadResult& result) : name_(name), result_(result) {}
 
   void add(double x, double y, double z) {
+    if (++seen_ > kMaxCloudPoints) {
+      throw FormatError(name_ + ": more than the largest cloud read (" +
+                        std::to_string(kMaxCloudPoints) + " points)");
+    }
     // Beyond the float range counts as non-finite too: storage cannot hold it.
     const float xf = to_float_saturating(x);
     const float yf = to_float_saturating(y);
@@ -317,8 +316,20 @@ class PointSink {
   [[nodiscard]] ReadResult& result() { return result_; }
 
  private:
+  const std::string& name_;
   ReadResult& result_;
+  std::uint64_t seen_ = 0;
 };
+
+// A declared point count beyond the largest cloud: the message names the count and the limit.
+bool beyond_cloud_limit(std::uint64_t points) {
+  return points > kMaxCloudPoints;
+}
+
+std::string cloud_limit_text(std::uint64_t points) {
+  return std::to_string(points) + " points exceed the largest cloud read (" +
+         std::to_string(kMaxCloudPoints) + " points)";
+}
 
 // Smallest text for one point: "0 0 0\n".
 constexpr std::size_t kMinTextPointBytes = 6;
@@ -507,7 +518,36 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
               "POINTS " + std::to_string(header.points) + " does not match WIDTH x HEIGHT = " +
                   std::to_string(header.width) + " x " + std::to_string(header.height));
   }
+  if (beyond_cloud_limit(header.points)) {
+    fail_line(name, have_points ? header.points_line : header.data_line,
+              cloud_limit_text(header.points));
+  }
   return header;
+}
+
+// Every value of a data line is of its field's type: a number for F, an integer that fits SIZE
+// bytes for I and U. The line has as many values as the fields' COUNTs add up to.
+void check_pcd_values(const std::string& name, std::size_t line_number, const PcdHeader& header,
+                      std::string_view line) {
+  std::size_t field = 0;
+  std::uint64_t left = header.fields.empty() ? 0 : header.fields[0].count;
+  for (const std::string_view token : split_whitespace(line)) {
+    while (left == 0) left = header.fields[++field].count;
+    const PcdField& f = header.fields[field];
+    double ignored = 0.0;
+    const bool ok = f.type == 'F' ? parse_number(token, ignored)
+                                  : is_integer_token(token, f.size, f.type == 'I');
+    if (!ok) {
+      fail_line(name, line_number,
+                shown(token) + " is not " +
+                    (f.type == 'F'
+                         ? std::string("a number")
+                         : (f.type == 'I' ? "a signed" : "an unsigned") +
+                               std::string(" integer of ") + std::to_string(f.size) + " byte(s)") +
+                    " (field '" + f.name + "')");
+    }
+    --left;
+  }
 }
 
 void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor& cursor,
@@ -551,6 +591,7 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
       fail_line(name, cursor.line(),
                 "expected " + std::to_string(columns) + " values, got " + std::to_string(count));
     }
+    check_pcd_values(name, cursor.line(), header, line);
     std::array<double, 3> p{};
     for (std::size_t axis = 0; axis < 3; ++axis) {
       if (!parse_number(xyz[axis], p[axis])) {
@@ -590,6 +631,20 @@ PcdLayout pcd_layout(const std::string& name, const PcdHeader& header) {
   return layout;
 }
 
+// The bytes after binary point data must be none, or zeros that fill a page: PCL before 1.10
+// stretched its files to a page (4096 bytes, up to 64 KiB on some systems) plus the data.
+void check_pcd_end(const std::string& name, std::string_view data, std::size_t end) {
+  constexpr std::size_t kLargestPage = std::size_t{1} << 16;
+  const std::string_view rest = data.substr(end);
+  const bool page_padding =
+      rest.size() < kLargestPage && rest.find_first_not_of('\0') == std::string_view::npos;
+  if (!page_padding) {
+    fail_byte(name, end,
+              std::to_string(rest.size()) +
+                  " bytes after the point data (only zeros that fill a page may follow)");
+  }
+}
+
 void read_pcd_binary(const std::string& name, const PcdHeader& header, std::string_view data,
                      PointSink& sink) {
   const PcdLayout layout = pcd_layout(name, header);
@@ -600,6 +655,7 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
               "truncated binary data (need " + byte_count_text(need) +
                   " bytes of point data, have " + std::to_string(available) + ")");
   }
+  check_pcd_end(name, data, header.data_offset + static_cast<std::size_t>(*need));
   const char* const base = data.data() + header.data_offset;
   const std::size_t step = static_cast<std::size_t>(layout.point_size);
   std::array<std::size_t, 3> offset{};
@@ -618,10 +674,42 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
   }
 }
 
+// Size of the output of an LZF block, found by walking its control bytes without writing
+// anything, so that a lying or corrupt block is rejected before its output is allocated.
+// nullopt when the block is corrupt: a run or reference cut off by the end, or a back reference
+// to before the start of the output. Format: a control byte c < 32 starts a run of c + 1 literal
+// bytes; otherwise it is a back reference of length (c >> 5) + 2 (a second byte extends length
+// 7), its offset ((c & 31) << 8) + the next byte + 1.
+std::optional<std::uint64_t> lzf_output_size(std::string_view block) {
+  std::uint64_t out = 0;
+  std::size_t in = 0;
+  while (in < block.size()) {
+    const auto control = static_cast<unsigned char>(block[in++]);
+    if (control < 32) {
+      const std::size_t run = control + 1u;
+      if (run > block.size() - in) return std::nullopt;
+      in += run;
+      out += run;
+      continue;
+    }
+    std::uint64_t length = control >> 5;
+    if (length == 7) {
+      if (in >= block.size()) return std::nullopt;
+      length += static_cast<unsigned char>(block[in++]);
+    }
+    if (in >= block.size()) return std::nullopt;
+    const std::uint64_t offset =
+        ((std::uint64_t{control} & 31u) << 8) + static_cast<unsigned char>(block[in++]) + 1;
+    if (offset > out) return std::nullopt;
+    out += length + 2;
+  }
+  return out;
+}
+
 void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::string_view data,
                          PointSink& sink) {
-  // LZF emits at most 264 bytes per 3-byte back reference; a larger claimed ratio is a lie.
-  constexpr std::uint64_t kMaxLzfRatio = 100;
+  // The most LZF can expand: a 3-byte back reference emits at most 264 bytes.
+  constexpr std::uint64_t kMaxLzfRatio = 264 / 3;
   const PcdLayout layout = pcd_layout(name, header);
   const std::size_t start = header.data_offset;
   const std::size_t available = data.size() - start;
@@ -642,11 +730,19 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
               "truncated compressed data (need " + std::to_string(compressed) + " bytes, have " +
                   std::to_string(available - 8) + ")");
   }
+  check_pcd_end(name, data, start + 8 + compressed);
   if (uncompressed == 0) return;
   if (uncompressed > std::uint64_t{compressed} * kMaxLzfRatio) {
     fail_byte(name, start + 4,
               "uncompressed size " + std::to_string(uncompressed) + " is impossible for " +
                   std::to_string(compressed) + " bytes of LZF data");
+  }
+  const std::string_view block = data.substr(start + 8, compressed);
+  if (const auto decoded = lzf_output_size(block); decoded != uncompressed) {
+    fail_byte(name, start + 8,
+              !decoded ? "corrupt LZF data"
+                       : "LZF data decompress to " + std::to_string(*decoded) +
+                             " bytes, expected " + std::to_string(uncompressed));
   }
   std::vector<char> raw(uncompressed);
   const unsigned int got =
@@ -720,6 +816,15 @@ std::optional<PlyType> ply_type(std::string_view name) {
     if (text == name) return type;
   }
   return std::nullopt;
+}
+
+// The PLY name of a type, from the table above (its first spelling).
+std::string ply_type_name(PlyType type) {
+  for (const std::string_view name :
+       {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"}) {
+    if (ply_type(name) == type) return std::string(name);
+  }
+  return "value";
 }
 
 std::size_t ply_size(PlyType type) {
@@ -875,7 +980,19 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
       fail_line(name, vertex->line, "vertex property '" + found->name + "' is a list");
     header.xyz[axis] = static_cast<std::size_t>(found - props.begin());
   }
+  if (beyond_cloud_limit(vertex->count)) {
+    fail_line(name, vertex->line, "element vertex: " + cloud_limit_text(vertex->count));
+  }
   return header;
+}
+
+// Whether a token is a value of a PLY type: a number for float and double, an integer that
+// fits the type for the others.
+bool is_ply_value(PlyType type, std::string_view token) {
+  double ignored = 0.0;
+  if (type == PlyType::f32 || type == PlyType::f64) return parse_number(token, ignored);
+  const bool is_signed = type == PlyType::i8 || type == PlyType::i16 || type == PlyType::i32;
+  return is_integer_token(token, ply_size(type), is_signed);
 }
 
 void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor& cursor,
@@ -899,14 +1016,29 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
       for (std::size_t k = 0; k < element.properties.size(); ++k) {
         const PlyProperty& property = element.properties[k];
         const std::string_view value = next();
+        const auto check = [&](PlyType type, std::string_view text) {
+          if (!is_ply_value(type, text)) {
+            fail_line(name, cursor.line(),
+                      shown(text) + " is not " +
+                          (type == PlyType::f32 || type == PlyType::f64
+                               ? std::string("a number")
+                               : "a " + ply_type_name(type) + " value") +
+                          " (property '" + property.name + "')");
+          }
+        };
         if (property.is_list) {
           std::uint64_t length = 0;
-          if (!parse_uint(value, length)) {
+          if (!parse_uint(value, length) || !is_ply_value(property.count_type, value)) {
             fail_line(name, cursor.line(),
-                      shown(value) + " is not a list length (property '" + property.name + "')");
+                      shown(value) + " is not a list length of type " +
+                          ply_type_name(property.count_type) + " (property '" + property.name +
+                          "')");
           }
-          for (std::uint64_t i = 0; i < length; ++i) next();
-        } else if (is_vertex) {
+          for (std::uint64_t i = 0; i < length; ++i) check(property.type, next());
+          continue;
+        }
+        check(property.type, value);
+        if (is_vertex) {
           for (std::size_t axis = 0; axis < 3; ++axis) {
             if (header.xyz[axis] == k && !parse_number(value, p[axis])) {
               fail_line(name, cursor.line(),
@@ -1011,6 +1143,11 @@ void read_ply_binary(const std::string& name, const PlyHeader& header, std::stri
       }
     }
   }
+  if (pos != data.size()) {
+    fail_byte(name, pos,
+              std::to_string(data.size() - pos) +
+                  " bytes after the last element (binary PLY ends with its data)");
+  }
 }
 
 void read_ply(const std::string& name, std::string_view data, PointSink& sink) {
@@ -1036,6 +1173,7 @@ void read_float_records(const std::string& name, std::string_view data, std::siz
                   " bytes is not a multiple of " + std::to_string(record) + " (" + layout + ")");
   }
   const std::size_t n = data.size() / record;
+  if (beyond_cloud_limit(n)) fail_byte(name, 0, cloud_limit_text(n));
   sink.result().points_in_file = n;
   sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -1188,6 +1326,7 @@ void read_vtk(const std::string& name, std::string_view data, PointSink& sink) {
     fail_line(name, cursor.line(), "unsupported POINTS type " + shown(type) + " (float or double)");
   }
 
+  if (beyond_cloud_limit(count)) fail_line(name, cursor.line(), cloud_limit_text(count));
   sink.result().points_in_file = static_cast<std::size_t>(count);
   sink.reserve(count, cursor.remaining() / kMinTextPointBytes);
   for (std::uint64_t i = 0; i < count; ++i) {
@@ -1271,7 +1410,7 @@ ReadResult parse_point_cloud(const std::string& name, std::string_view data, Fil
   if (data.empty()) fail_byte(name, 0, "empty file");
   ReadResult result;
   result.format = format;
-  PointSink sink(result);
+  PointSink sink(name, result);
   switch (format) {
     case FileFormat::pcd:
       read_pcd(name, data, sink);
@@ -1343,6 +1482,10 @@ ReadResult read_point_cloud(const std::filesystem::path& path, FileFormat format
 
 ReadResult read_point_cloud_from_memory(std::span<const std::byte> bytes, FileFormat format,
                                         std::string_view name) {
+  if (bytes.size() > kMaxFileBytes) {
+    throw FormatError(std::string(name) + ": larger than the largest file read (" +
+                      limit_text(kMaxFileBytes) + ")");
+  }
   if (format == FileFormat::automatic) {
     throw FormatError(std::string(name) +
                       ": reading from memory needs an explicit format (no extension to go by)");

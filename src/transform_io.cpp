@@ -4,66 +4,87 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <vector>
 
+#include "parse_number.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/pose.hpp"
 
 namespace sgdicp {
 namespace {
 
+// A transform is a few hundred bytes: a larger file, or one that is not a regular file (a
+// directory, /dev/zero, a FIFO), is not a transform and is not read.
+constexpr std::uintmax_t kMaxTransformFileBytes = std::uintmax_t{1} << 20;
+
 std::string read_text_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && status.type() == std::filesystem::file_type::directory) {
+    throw IoError(path.string() + ": a directory, not a transform file");
+  }
+  if (!ec && status.type() != std::filesystem::file_type::regular) {
+    throw IoError(path.string() + ": not a regular file (only regular files are read)");
+  }
+  if (!ec && std::filesystem::file_size(path, ec) > kMaxTransformFileBytes && !ec) {
+    throw IoError(path.string() + ": larger than " + std::to_string(kMaxTransformFileBytes) +
+                  " bytes, not a transform file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string() + ": cannot open: " + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
+  std::string text(kMaxTransformFileBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
   if (in.bad()) throw IoError(path.string() + ": read error");
-  return buffer.str();
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxTransformFileBytes) {
+    throw IoError(path.string() + ": larger than " + std::to_string(kMaxTransformFileBytes) +
+                  " bytes, not a transform file");
+  }
+  return text;
+}
+
+bool is_transform_separator(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == ',' || c == ';' || c == '[' ||
+         c == ']' || c == '#';
 }
 
 }  // namespace
 
 Eigen::Matrix4d parse_transform(std::string_view text, std::string_view what) {
+  const auto fail = [&](std::size_t line, const std::string& message) {
+    throw FormatError(std::string(what) + ": line " + std::to_string(line) + ": " + message);
+  };
   std::vector<double> values;
   std::size_t line = 1;
-  bool in_comment = false;
-  const char* p = text.data();
-  const char* const end = text.data() + text.size();
-  while (p < end) {
-    const char c = *p;
-    if (c == '\n') {
-      ++line;
-      in_comment = false;
-      ++p;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '#') {  // a comment to the end of the line
+      while (i < text.size() && text[i] != '\n') ++i;
       continue;
     }
-    if (in_comment || c == ' ' || c == '\t' || c == '\r' || c == ',' || c == ';' || c == '[' ||
-        c == ']') {
-      ++p;
+    if (is_transform_separator(c)) {
+      line += c == '\n' ? 1 : 0;
+      ++i;
       continue;
     }
-    if (c == '#') {
-      in_comment = true;
-      ++p;
-      continue;
-    }
+    // A whole token must be one number: "0.0.5" is an error, not 0.0 and .5.
+    const std::size_t start = i;
+    while (i < text.size() && !is_transform_separator(text[i])) ++i;
+    const std::string_view token = text.substr(start, i - start);
     double v = 0.0;
-    const char* start = p + (c == '+' ? 1 : 0);
-    const auto [next, ec] = std::from_chars(start, end, v);
-    if (ec != std::errc() || next == start) {
-      throw FormatError(
-          std::string(what) + ": line " + std::to_string(line) + ": expected a number, got '" +
-          std::string(p, std::min<std::size_t>(12, static_cast<std::size_t>(end - p))) + "'");
+    if (!parse_number(token, v)) {
+      fail(line, "expected a number, got '" + std::string(token.substr(0, 40)) + "'" +
+                     (token.size() > 40 ? "..." : ""));
     }
     if (!std::isfinite(v)) {
-      throw FormatError(std::string(what) + ": line " + std::to_string(line) +
-                        ": non-finite value in transform");
+      fail(line, "non-finite value '" + std::string(token.substr(0, 40)) + "' in transform");
     }
     values.push_back(v);
-    p = next;
   }
   if (values.size() != 12 && values.size() != 16) {
     throw FormatError(std::string(what) + ": expected 12 (3x4) or 16 (4x4) numbers, got " +

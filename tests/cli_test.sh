@@ -332,6 +332,19 @@ expect_error "--init with a directory" '--init .*: a directory, not a transform 
   register "$MOVED" "$REF" --init "$tmp"
 expect_error "--ground-truth with a directory" '--ground-truth .*: a directory' \
   register "$MOVED" "$REF" --ground-truth "$tmp"
+expect_error "--init '0.0.5 ...' says which number is wrong" \
+  "^sgdicp: error: --init: line 1: expected a number, got '0.0.5'" \
+  register "$MOVED" "$REF" --init "0.0.5 0 0 0 0 1 0 0 0 0 1 0"
+expect_error "--ground-truth '+-1 ...' is an error, not -1" \
+  "^sgdicp: error: --ground-truth: line 1: expected a number, got '\\+-1'" \
+  register "$MOVED" "$REF" --ground-truth "+-1 0 0 0 0 1 0 0 0 0 1 0"
+if [ -e /dev/zero ]; then
+  ln -sf /dev/zero "$tmp/zero.bin"
+  expect_error "a source that is a symlink to /dev/zero" 'zero.bin: a character device' \
+    register "$tmp/zero.bin" "$REF"
+  expect_error "--init that is a symlink to /dev/zero" '^sgdicp: error: --init: .*not a regular file' \
+    register "$MOVED" "$REF" --init "$tmp/zero.bin"
+fi
 expect_error "--picture x.jpg is refused (PNG only)" '--picture .*x.jpg: .*PNG.*\.png' \
   register "$MOVED" "$REF" --picture "$tmp/x.jpg"
 if [ ! -e "$tmp/x.jpg" ]; then

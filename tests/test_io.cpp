@@ -6,6 +6,7 @@
 #include <array>
 #include <atomic>
 #include <bit>
+#include <clocale>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include <initializer_list>
 #include <iterator>
 #include <limits>
+#include <new>
 #include <ostream>
 #include <random>
 #include <span>
@@ -24,8 +26,11 @@
 #include <utility>
 #include <vector>
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
+#include "allocation_tracker.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/io.hpp"
 
@@ -691,33 +696,33 @@ TEST_F(IoTest, RejectsPcdHeaderErrors) {
 }
 
 TEST_F(IoTest, RejectsHeadersLyingAboutThePointCount) {
-  // Each would need gigabytes; each must fail on the bounds check, not on an allocation.
+  // Each would need gigabytes (within the largest cloud read); each must fail on the bounds
+  // check, not on an allocation.
   const std::string pcd =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      "WIDTH 4000000000\nHEIGHT 1\nPOINTS 4000000000\nDATA binary\n";
-  expect_error<FormatError>(
-      write("lie.pcd", pcd + std::string(1000, '\x01')),
-      {"byte " + std::to_string(pcd.size()), "need 48000000000", "have 1000"});
+      "WIDTH 200000000\nHEIGHT 1\nPOINTS 200000000\nDATA binary\n";
+  expect_error<FormatError>(write("lie.pcd", pcd + std::string(1000, '\x01')),
+                            {"byte " + std::to_string(pcd.size()), "need 2400000000", "have 1000"});
 
   const std::string ascii =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      "WIDTH 4000000000\nHEIGHT 1\nPOINTS 4000000000\nDATA ascii\n";
+      "WIDTH 200000000\nHEIGHT 1\nPOINTS 200000000\nDATA ascii\n";
   expect_error<FormatError>(write("lie_ascii.pcd", ascii + "1 2 3\n"),
-                            {"line 10", "expected 4000000000 points"});
+                            {"line 10", "expected 200000000 points"});
 
   const std::string compressed =
       "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-      "WIDTH 300000000\nHEIGHT 1\nPOINTS 300000000\nDATA binary_compressed\n";
+      "WIDTH 250000000\nHEIGHT 1\nPOINTS 250000000\nDATA binary_compressed\n";
   Bytes c;
   c.text(compressed)
       .le(std::uint32_t{100})
-      .le(std::uint32_t{3600000000u})
+      .le(std::uint32_t{3000000000u})
       .text(std::string(100, 'a'));
   expect_error<FormatError>(write("lie_compressed.pcd", c.str()),
                             {"byte " + std::to_string(compressed.size() + 4), "impossible"});
 
   const std::string ply =
-      "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+      "ply\nformat binary_little_endian 1.0\nelement vertex 200000000\n"
       "property float x\nproperty float y\nproperty float z\nend_header\n";
   expect_error<FormatError>(write("lie.ply", ply + std::string(1000, '\x01')),
                             {"byte " + std::to_string(ply.size())});
@@ -733,8 +738,103 @@ TEST_F(IoTest, RejectsHeadersLyingAboutThePointCount) {
 
   expect_error<FormatError>(write("lie.vtk",
                                   "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\n"
-                                  "POINTS 4000000000 float\n1 2 3\n"),
-                            {"line 6", "4000000000 points"});
+                                  "POINTS 200000000 float\n1 2 3\n"),
+                            {"line 6", "200000000 points"});
+}
+
+// A 4 MB block of garbage whose header claims 88 x its size (the most LZF can expand), as in
+// issue 11: rejected by walking the block, before the 350 MB output is allocated.
+std::string hostile_compressed_pcd(std::uint64_t points) {
+  std::mt19937 rng(7);
+  std::string garbage(4'000'000, '\0');
+  for (char& c : garbage) c = static_cast<char>(rng());
+  garbage[0] = '\x1f';  // a literal run first, so that decompressing would get going
+  const std::string header =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " +
+      std::to_string(points) + "\nHEIGHT 1\nDATA binary_compressed\n";
+  Bytes b;
+  b.text(header)
+      .le(static_cast<std::uint32_t>(garbage.size()))
+      .le(static_cast<std::uint32_t>(points * 12))
+      .text(garbage);
+  return b.str();
+}
+
+TEST_F(IoTest, GarbageCompressedPcdFailsWithoutAllocatingItsClaim) {
+  const std::uint64_t points = 4'000'000 * 88 / 12;  // 352 MB claimed
+  const std::string pcd = hostile_compressed_pcd(points);
+  const auto* data = reinterpret_cast<const std::byte*>(pcd.data());
+  reset_largest_allocation();
+  EXPECT_THROW((void)read_point_cloud_from_memory({data, pcd.size()}, FileFormat::pcd),
+               FormatError);
+  EXPECT_LT(largest_allocation(), std::size_t{1} << 20);
+
+  const fs::path path = write("hostile.pcd", pcd);
+  reset_largest_allocation();
+  expect_error<FormatError>(path, {"corrupt LZF data"});
+  EXPECT_LT(largest_allocation(), pcd.size() + (std::size_t{1} << 20));  // the file copy
+
+  // Claims beyond what LZF can produce from 4 MB fail on the header alone.
+  reset_largest_allocation();
+  expect_error<FormatError>(write("claim.pcd", hostile_compressed_pcd(std::uint64_t{1} << 28)),
+                            {"3221225472", "impossible for 4000000 bytes"});
+  EXPECT_LT(largest_allocation(), pcd.size() + (std::size_t{1} << 20));
+}
+
+TEST_F(IoTest, LzfBlockDecodingToAnotherSizeIsRejectedBeforeDecompressing) {
+  Bytes raw;
+  std::mt19937 rng(3);
+  for (int i = 0; i < 3000; ++i) raw.le(static_cast<float>(rng() % 1000));
+  const std::string block = lzf_block(raw.str());
+  // The header claims twice the points: still within 88 x, but the block says otherwise.
+  const std::string header =
+      pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 2000, 1, "binary_compressed");
+  Bytes b;
+  b.text(header).le(static_cast<std::uint32_t>(block.size())).le(std::uint32_t{24000});
+  b.text(block);
+  reset_largest_allocation();
+  expect_error<FormatError>(write("short.pcd", b.str()), {"decompress to 12000 bytes", "24000"});
+  EXPECT_LT(largest_allocation(), 20000u);
+}
+
+TEST_F(IoTest, CloudsBeyondTheLargestAreRejectedNamingTheLimit) {
+  const std::string limit = std::to_string(kMaxCloudPoints);
+  EXPECT_EQ(limit, "268435456");
+  const std::string pcd =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+      "WIDTH 4000000000\nHEIGHT 1\nPOINTS 4000000000\nDATA binary\n";
+  expect_error<FormatError>(write("big.pcd", pcd + std::string(1000, '\x01')),
+                            {"line 8", "4000000000 points exceed", limit});
+  const std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 268435457\n"
+      "property float x\nproperty float y\nproperty float z\nend_header\n";
+  expect_error<FormatError>(write("big.ply", ply + std::string(1000, '\x01')),
+                            {"line 3", "268435457 points exceed", limit});
+  // The real count, not one wrapped by a multiplication.
+  expect_error<FormatError>(write("big.vtk",
+                                  "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\n"
+                                  "POINTS 18446744073709551615 float\n1 2 3\n"),
+                            {"line 5", "18446744073709551615 points exceed", limit});
+}
+
+TEST_F(IoTest, NonRegularFilesAreRejectedWithAMessage) {
+  if (!fs::exists("/dev/zero")) GTEST_SKIP() << "no /dev/zero";
+  const fs::path zero = dir_ / "zero.bin";
+  fs::create_symlink("/dev/zero", zero);
+  expect_error<IoError>(zero, {"a character device", "only regular files"});
+  const fs::path fifo = dir_ / "fifo.xyz";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error<IoError>(fifo, {"a FIFO"});  // and does not block waiting for a writer
+}
+
+TEST_F(IoTest, FilesBeyondTheLargestAreRejectedBeforeReading) {
+  const fs::path path = write("huge.f32", "");
+  std::error_code ec;
+  fs::resize_file(path, kMaxFileBytes + 12, ec);  // sparse: no disk space used
+  if (ec) GTEST_SKIP() << "cannot make a sparse file: " << ec.message();
+  reset_largest_allocation();
+  expect_error<IoError>(path, {"larger than the largest file read", "17179869184 bytes = 16 GiB"});
+  EXPECT_LT(largest_allocation(), std::size_t{1} << 20);
 }
 
 TEST_F(IoTest, RejectsPlyWithoutVertexElement) {
@@ -1158,6 +1258,188 @@ TEST(IoMemory, NeedsAnExplicitFormatAndNamesTheSource) {
     EXPECT_TRUE(std::string(e.what()).starts_with("fuzz input: line 2:")) << e.what();
   }
   EXPECT_THROW((void)read_point_cloud_from_memory({}, FileFormat::pcd), FormatError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Numbers in text formats
+
+ReadResult read_text(const std::string& text, FileFormat format = FileFormat::xyz) {
+  const auto* data = reinterpret_cast<const std::byte*>(text.data());
+  return read_point_cloud_from_memory({data, text.size()}, format, "numbers");
+}
+
+std::string text_error(const std::string& text, FileFormat format = FileFormat::xyz) {
+  try {
+    (void)read_text(text, format);
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(IoNumbers, OverflowIsInfiniteAndDroppedUnderflowIsZero) {
+  const std::string overflow = "1" + std::string(400, '0') + "e-1";     // 1e399
+  const std::string underflow = "0." + std::string(400, '0') + "1e+1";  // 1e-400
+  const ReadResult r = read_text("1 2 " + overflow + "\n" + underflow + " -" + underflow +
+                                 " -1e-400\n-" + overflow + " 0 0\n");
+  EXPECT_EQ(r.points_in_file, 3u);
+  EXPECT_EQ(r.non_finite_dropped, 2u);
+  ASSERT_EQ(r.cloud.size(), 1u);
+  EXPECT_EQ(r.cloud.points[0], Eigen::Vector3f::Zero());
+  EXPECT_FALSE(std::signbit(r.cloud.points[0].x()));
+  EXPECT_TRUE(std::signbit(r.cloud.points[0].y()));
+  EXPECT_TRUE(std::signbit(r.cloud.points[0].z()));
+  // Exponents beyond any integer type saturate the same way.
+  EXPECT_EQ(read_text("1e99999999999999999999999 0 0\n").non_finite_dropped, 1u);
+  EXPECT_EQ(read_text("1e-99999999999999999999999 0 0\n").cloud.size(), 1u);
+}
+
+TEST(IoNumbers, EdgesOfTheFloatStorageAndLongMantissas) {
+  constexpr float kMax = std::numeric_limits<float>::max();
+  constexpr float kDenorm = std::numeric_limits<float>::denorm_min();
+  const ReadResult r = read_text("3.4028234663852886e38 1.4e-45 1e-310\n3.5e38 0 0\n");
+  EXPECT_EQ(r.non_finite_dropped, 1u);  // beyond the float range: infinite
+  ASSERT_EQ(r.cloud.size(), 1u);
+  EXPECT_EQ(r.cloud.points[0].x(), kMax);
+  EXPECT_EQ(r.cloud.points[0].y(), kDenorm);
+  EXPECT_EQ(r.cloud.points[0].z(), 0.0f);  // a double subnormal, below the float ones
+  // 500 digits: correctly rounded, not cut off.
+  const std::string long_one = "0." + std::string(500, '9');  // 1 - 1e-500
+  const std::string long_tenth = "0.1" + std::string(500, '0') + "1";
+  const ReadResult l =
+      read_text(long_one + " " + long_tenth + " 1" + std::string(300, '0') + "e-300\n");
+  ASSERT_EQ(l.cloud.size(), 1u);
+  EXPECT_EQ(l.cloud.points[0].x(), 1.0f);
+  EXPECT_EQ(l.cloud.points[0].y(), 0.1f);
+  EXPECT_EQ(l.cloud.points[0].z(), 1.0f);
+}
+
+TEST(IoNumbers, StrictTokensInEveryTextFormat) {
+  EXPECT_EQ(read_text("+1 +2.5 -3\n").cloud.points[0], Eigen::Vector3f(1, 2.5f, -3));
+  for (const std::string bad :
+       {"0.0.5", "+-1", "++1", "1e", "1e+", ".", "-", "0x1p3", "1.5f", "1_000"}) {
+    SCOPED_TRACE(bad);
+    const std::string xyz = text_error("1 2 3\n0 " + bad + " 0\n");
+    EXPECT_NE(xyz.find("numbers: line 2: '" + bad + "' is not a number"), std::string::npos) << xyz;
+    const std::string pcd = text_error(
+        pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii") + "0 0 " + bad + "\n",
+        FileFormat::pcd);
+    EXPECT_NE(pcd.find("is not a number"), std::string::npos) << pcd;
+    const std::string ply = text_error(
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+        "property float z\nend_header\n" +
+            bad + " 0 0\n",
+        FileFormat::ply);
+    EXPECT_NE(ply.find("is not a number"), std::string::npos) << ply;
+    const std::string vtk = text_error(
+        "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 " + bad + " 0\n",
+        FileFormat::vtk);
+    EXPECT_NE(vtk.find("is not a number"), std::string::npos) << vtk;
+  }
+}
+
+TEST(IoNumbers, DecimalPointIgnoresTheLocale) {
+  const char* previous = std::setlocale(LC_ALL, nullptr);
+  const std::string saved = previous != nullptr ? previous : "C";
+  bool comma_locale = false;
+  for (const char* name : {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "ru_RU.UTF-8"}) {
+    if (std::setlocale(LC_ALL, name) != nullptr) {
+      comma_locale = true;
+      break;
+    }
+  }
+  if (!comma_locale) GTEST_SKIP() << "no locale with a decimal comma installed";
+  const ReadResult r = read_text("1.5 2.25 -3.125\n");
+  std::setlocale(LC_ALL, saved.c_str());
+  ASSERT_EQ(r.cloud.size(), 1u);
+  EXPECT_EQ(r.cloud.points[0], Eigen::Vector3f(1.5f, 2.25f, -3.125f));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Strictness: every value of its type, nothing after binary data
+
+TEST(IoStrict, PlyAsciiValuesOfEveryPropertyHaveTheirType) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+      "property float z\nproperty uchar red\nproperty char dx\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  EXPECT_EQ(read_text(header + "1 2 3 255 -128\n1 0\n", FileFormat::ply).cloud.size(), 1u);
+  const std::pair<std::string, std::string> cases[] = {
+      {"1 2 3 banana 0\n1 0\n", "line 12: 'banana' is not a uchar value (property 'red')"},
+      {"1 2 3 256 0\n1 0\n", "'256' is not a uchar value (property 'red')"},
+      {"1 2 3 -1 0\n1 0\n", "'-1' is not a uchar value"},
+      {"1 2 3 1.5 0\n1 0\n", "'1.5' is not a uchar value"},
+      {"1 2 3 0 -129\n1 0\n", "'-129' is not a char value (property 'dx')"},
+      {"1 2 3 0 0\nbanana 0\n", "line 13: 'banana' is not a list length of type uchar"},
+      {"1 2 3 0 0\n256 0\n", "'256' is not a list length of type uchar"},
+      {"1 2 3 0 0\n1 banana\n", "'banana' is not a int value (property 'vertex_indices')"},
+  };
+  for (const auto& [body, message] : cases) {
+    SCOPED_TRACE(body);
+    const std::string error = text_error(header + body, FileFormat::ply);
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
+TEST(IoStrict, PcdAsciiValuesOfEveryFieldHaveTheirType) {
+  const std::string header = pcd_header("x y z rgb label normal", "4 4 4 4 1 4", "F F F U I F",
+                                        "1 1 1 1 1 3", 1, 1, "ascii");
+  const ReadResult ok = read_text(header + "1 2 3 4294967295 -128 nan 0 1e-3\n", FileFormat::pcd);
+  EXPECT_EQ(ok.cloud.size(), 1u);
+  const std::pair<std::string, std::string> cases[] = {
+      {"1 2 3 banana 0 0 0 0\n",
+       "line 12: 'banana' is not an unsigned integer of 4 byte(s) "
+       "(field 'rgb')"},
+      {"1 2 3 4294967296 0 0 0 0\n", "'4294967296' is not an unsigned integer"},
+      {"1 2 3 -1 0 0 0 0\n", "'-1' is not an unsigned integer"},
+      {"1 2 3 0 128 0 0 0\n", "'128' is not a signed integer of 1 byte(s) (field 'label')"},
+      {"1 2 3 0 0 0 banana 0\n", "'banana' is not a number (field 'normal')"},
+  };
+  for (const auto& [body, message] : cases) {
+    SCOPED_TRACE(body);
+    const std::string error = text_error(header + body, FileFormat::pcd);
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+}
+
+TEST(IoStrict, BytesAfterBinaryDataAreAnErrorExceptPagePadding) {
+  Bytes points;
+  for (const float v : {1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f}) points.le(v);
+  const std::string pcd = pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 2, 1, "binary");
+  const std::string data = pcd + points.str();
+  // PCL before 1.10 padded its files with zeros to a page after the header (real files in
+  // pcl_kinect_frames end with 3901 zero bytes).
+  const std::string padding(4096 - pcd.size(), '\0');
+  EXPECT_EQ(read_text(data + padding, FileFormat::pcd).cloud.size(), 2u);
+  const std::string one =
+      text_error(data + padding.substr(1) + std::string(1, '\x01'), FileFormat::pcd);
+  EXPECT_NE(one.find("byte " + std::to_string(data.size()) + ": " + std::to_string(padding.size()) +
+                     " bytes after the point data"),
+            std::string::npos)
+      << one;
+  const std::string zeros = text_error(data + std::string(70000, '\0'), FileFormat::pcd);
+  EXPECT_NE(zeros.find("70000 bytes after the point data"), std::string::npos) << zeros;
+
+  const std::string block = lzf_block(points.str());
+  Bytes compressed;
+  compressed.text(pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 2, 1, "binary_compressed"))
+      .le(static_cast<std::uint32_t>(block.size()))
+      .le(static_cast<std::uint32_t>(points.str().size()))
+      .text(block);
+  EXPECT_EQ(read_text(compressed.str() + padding, FileFormat::pcd).cloud.size(), 2u);
+  const std::string after = text_error(compressed.str() + "junk", FileFormat::pcd);
+  EXPECT_NE(after.find("4 bytes after the point data"), std::string::npos) << after;
+
+  const std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n" +
+      points.str();
+  EXPECT_EQ(read_text(ply, FileFormat::ply).cloud.size(), 2u);
+  const std::string ply_error = text_error(ply + std::string(1, '\0'), FileFormat::ply);
+  EXPECT_NE(
+      ply_error.find("byte " + std::to_string(ply.size()) + ": 1 bytes after the last element"),
+      std::string::npos)
+      << ply_error;
 }
 
 }  // namespace

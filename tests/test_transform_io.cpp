@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -243,6 +244,52 @@ TEST(TransformFile, ReadErrors) {
   EXPECT_THROW(
       sgdicp::write_transform(dir.path() / "no" / "such" / "dir.txt", Eigen::Matrix4d::Identity()),
       sgdicp::IoError);
+}
+
+TEST(ParseTransform, StrictTokens) {
+  const std::string rest = " 0 0 0  0 1 0 0  0 0 1 0";  // 11 numbers after the first
+  EXPECT_EQ(sgdicp::parse_transform("+1" + rest, "plus")(0, 0), 1.0);
+  // One token is one number: "0.0.5" is not 0.0 and .5, "+-1" is not -1.
+  for (const std::string bad : {"0.0.5", "+-1", "++1", "1e", "0x1p0", "1.0f", "1-2"}) {
+    SCOPED_TRACE(bad);
+    expect_format_error(bad + rest, "strict", "expected a number, got '" + bad + "'");
+  }
+  // 12 numbers once "0.0.5" is no longer split in two: the count error must not come first.
+  expect_format_error("1 0 0 0.0.5\n0 1 0 0\n0 0 1", "split", "'0.0.5'");
+}
+
+TEST(ParseTransform, NumberEdges) {
+  // The identity with the given text as t_x (and r00).
+  const auto with_tx = [](const std::string& tx, const std::string& r00 = "1") {
+    return r00 + " 0 0 " + tx + "  0 1 0 0  0 0 1 0";
+  };
+  // Overflow written out in full (1e399) is infinite: rejected, not read as 0.
+  expect_format_error(with_tx("1" + std::string(400, '0') + "e-1"), "overflow", "non-finite");
+  expect_format_error(with_tx("nan"), "nan", "non-finite");
+  expect_format_error(with_tx("-inf"), "inf", "non-finite");
+  // Underflow (1e-400) is 0, the subnormals exact, long mantissas correctly rounded.
+  EXPECT_EQ(sgdicp::parse_transform(with_tx("0." + std::string(400, '0') + "1e+1"), "u")(0, 3),
+            0.0);
+  EXPECT_EQ(sgdicp::parse_transform(with_tx("4.9406564584124654e-324"), "s")(0, 3),
+            std::numeric_limits<double>::denorm_min());
+  const Eigen::Matrix4d T = sgdicp::parse_transform(
+      with_tx("0.1" + std::string(600, '0') + "1", "0." + std::string(600, '9')), "long");
+  EXPECT_EQ(T(0, 0), 1.0);
+  EXPECT_EQ(T(0, 3), 0.1);
+}
+
+TEST(TransformFile, NonRegularFilesAreNotRead) {
+  const TempDir dir;
+  if (!fs::exists("/dev/zero")) GTEST_SKIP() << "no /dev/zero";
+  const fs::path zero = dir.path() / "zero.txt";
+  fs::create_symlink("/dev/zero", zero);
+  EXPECT_THROW((void)sgdicp::read_transform(zero), sgdicp::IoError);
+  const fs::path big = dir.path() / "big.txt";
+  {
+    std::ofstream out(big);
+    out << std::string(2 << 20, ' ');
+  }
+  EXPECT_THROW((void)sgdicp::read_transform(big), sgdicp::IoError);
 }
 
 }  // namespace

@@ -9,7 +9,12 @@
 // Readers are strict and bounds-checked: a truncated or malformed file raises FormatError whose
 // message names the file and where it broke (line number for text, byte offset for binary).
 // Points with a non-finite coordinate are dropped and counted, never returned.
+//
+// Resources are bounded by the input: every count or size a header claims is checked against the
+// bytes that are really there before anything is allocated, and no input larger than
+// kMaxFileBytes or cloud larger than kMaxCloudPoints is read (docs/io.md).
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -18,6 +23,15 @@
 #include "sgdicp/point_cloud.hpp"
 
 namespace sgdicp {
+
+/// Largest cloud read: 2^28 (268 million) points, 3 GiB as float x y z. A header declaring
+/// more, or a file holding more, raises FormatError naming the limit.
+inline constexpr std::uint64_t kMaxCloudPoints = std::uint64_t{1} << 28;
+
+/// Largest file (or memory block) read: 16 GiB, room for kMaxCloudPoints as text. A larger
+/// file raises IoError, a larger memory block FormatError. Only regular files are read: a
+/// directory, device (/dev/zero), FIFO or socket raises IoError, since it has no size to bound.
+inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t{1} << 34;
 
 enum class FileFormat {
   automatic,  ///< from the file extension (.pcd .ply .bin .xyz .txt .csv .vtk .f32)
