@@ -5,7 +5,8 @@ set -euo pipefail
 
 packages=(build-essential cmake pkg-config libeigen3-dev libnanoflann-dev libcli11-dev
   nlohmann-json3-dev liblzf-dev libstb-dev libgtest-dev libbenchmark-dev python3
-  python3-dev python3-venv)
+  python3-dev python3-venv
+  clang-14 libclang-rt-14-dev llvm-14)  # the last three: scripts/fuzz.sh (docs/fuzzing.md)
 
 missing=()
 for p in "${packages[@]}"; do

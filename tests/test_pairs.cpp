@@ -199,4 +199,26 @@ TEST(PairsFile, MissingFileIsAnIoError) {
   EXPECT_THROW((void)sgdicp::read_pairs_file(dir.path() / "missing.txt"), sgdicp::IoError);
 }
 
+TEST(PairsText, ParsesFromMemoryLikeTheFile) {
+  // parse_pairs is what read_pairs_file runs on the file's text (and what the fuzz target calls).
+  const std::string text = "# c\n\ns.pcd ../r.pcd " + std::string(kIdentity12) + "\r\nx y " +
+                           std::string(kIdentity12);  // no final newline
+  const auto pairs = sgdicp::parse_pairs(text, "/data/lists", "mem");
+  ASSERT_EQ(pairs.size(), 2U);
+  EXPECT_EQ(pairs[0].line, 3U);
+  EXPECT_EQ(pairs[0].source, fs::path("/data/lists/s.pcd"));
+  EXPECT_EQ(pairs[0].reference, fs::path("/data/lists/../r.pcd"));
+  EXPECT_EQ(pairs[1].line, 4U);
+  EXPECT_EQ(pairs[1].T_reference_source_gt, Eigen::Matrix4d::Identity());
+  try {
+    (void)sgdicp::parse_pairs("a b 1 2\n", "", "mem");
+    ADD_FAILURE() << "no FormatError";
+  } catch (const sgdicp::FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("mem: line 1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)sgdicp::parse_pairs("", "", "mem"), sgdicp::FormatError);
+  // A NUL byte is an ordinary character of a line, not its end.
+  EXPECT_THROW((void)sgdicp::parse_pairs(std::string("a\0b", 3), "", "mem"), sgdicp::FormatError);
+}
+
 }  // namespace

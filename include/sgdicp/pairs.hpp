@@ -3,6 +3,7 @@
 // `SOURCE REFERENCE t00 t01 t02 t03 t10 ... t23` with the ground truth T_reference_source as a
 // row-major 3x4 matrix; paths relative to the folder of the pairs file; '#' starts a comment line.
 #include <filesystem>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -16,7 +17,14 @@ struct RegistrationPair {
   std::size_t line = 0;  ///< line in the pairs file
 };
 
-/// Reads a pairs file. Throws IoError (cannot read) or FormatError (naming file and line).
+/// Parses the text of a pairs file; paths are resolved against `folder`, `name` names the source
+/// in error messages. Throws FormatError (naming `name` and the line).
+[[nodiscard]] std::vector<RegistrationPair> parse_pairs(std::string_view text,
+                                                        const std::filesystem::path& folder,
+                                                        std::string_view name);
+
+/// Reads a pairs file (see parse_pairs). Throws IoError (cannot read) or FormatError (naming file
+/// and line).
 [[nodiscard]] std::vector<RegistrationPair> read_pairs_file(const std::filesystem::path& path);
 
 }  // namespace sgdicp
