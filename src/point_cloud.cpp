@@ -5,15 +5,8 @@
 namespace sgdicp {
 
 PointCloud rebased(const PointCloud& cloud, const Eigen::Vector3d& origin_m) {
-  PointCloud out = cloud;
-  const Eigen::Vector3d shift_m = cloud.origin_m - origin_m;
-  for (auto& p : out.points) {
-    const Eigen::Vector3d moved = p.cast<double>() + shift_m;
-    p = {to_float_saturating(moved.x()), to_float_saturating(moved.y()),
-         to_float_saturating(moved.z())};
-  }
-  out.origin_m = origin_m;
-  return out;
+  // The identity between the frames: only the origin the points are stored from changes.
+  return transformed(cloud, Eigen::Matrix4d::Identity(), origin_m);
 }
 
 PointCloud transformed(const PointCloud& cloud, const Eigen::Matrix4d& T,

@@ -98,9 +98,8 @@ inline void check_pair(const ReferenceIndex& reference, CostType cost,
 /// georeferencing origin): beyond, squared distances in the single-precision KD-tree overflow
 /// and every pair would be lost without a word. A few far points are fine (robust scaling).
 inline void check_within_float_range(const BoundingBox& box, const char* which) {
-  constexpr double kLargest_m = 1e9;
-  if (box.valid() && box.min.cwiseAbs().maxCoeff() <= kLargest_m &&
-      box.max.cwiseAbs().maxCoeff() <= kLargest_m) {
+  if (box.valid() && box.min.cwiseAbs().maxCoeff() <= kLargestCoordinate_m &&
+      box.max.cwiseAbs().maxCoeff() <= kLargestCoordinate_m) {
     return;
   }
   throw InvalidInputError(std::string("the ") + which +

@@ -33,6 +33,12 @@ struct PointCloud {
   [[nodiscard]] bool empty() const noexcept { return points.empty(); }
 };
 
+/// The largest coordinate, metres from a cloud's origin, that is a place: no point on Earth is
+/// farther from a georeferencing origin, and beyond it squared distances in single precision
+/// come near overflow. georeferencing_origin leaves such coordinates alone and a registration
+/// rejects a scene whose bulk lies beyond.
+inline constexpr double kLargestCoordinate_m = 1e9;
+
 /// The origin a cloud whose first point is `point_m` gets, per axis: 0 below 16 km, where float
 /// resolves a coordinate to 1 mm or better (so sensor-frame and local-map clouds keep exactly
 /// the floats they always had), else the coordinate rounded to the nearest kilometre, so that the
@@ -43,11 +49,10 @@ struct PointCloud {
 [[nodiscard]] inline Eigen::Vector3d georeferencing_origin(const Eigen::Vector3d& point_m) {
   constexpr double kFloatIsEnough_m = 16384.0;  // float's spacing below: 2^-10 m (< 1 mm)
   constexpr double kGrid_m = 1000.0;
-  constexpr double kLargest_m = 1e9;
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (Eigen::Index axis = 0; axis < 3; ++axis) {
     const double magnitude = std::abs(point_m[axis]);
-    if (magnitude >= kFloatIsEnough_m && magnitude <= kLargest_m) {
+    if (magnitude >= kFloatIsEnough_m && magnitude <= kLargestCoordinate_m) {
       origin[axis] = std::round(point_m[axis] / kGrid_m) * kGrid_m;
     }
   }
