@@ -254,8 +254,9 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
   if (reduced) small_source = reduce(source);
   const PointCloud& src = small_source ? *small_source : source;
   ReferenceIndex index(reduced ? reduce(reference) : reference);
-  prepare_reference(index, m.stochastic ? m.sgd.cost : m.batch.cost,
-                    m.stochastic ? m.sgd.neighborhood : m.batch.neighborhood);
+  // align() estimates the normals or covariances of its cost for the pairs it uses; the batch
+  // solver needs them for every reference point beforehand.
+  if (!m.stochastic) prepare_reference(index, m.batch.cost, m.batch.neighborhood);
   MethodRun run;
   run.prepare_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -113,7 +113,8 @@ void run(const RegisterOptions& o) {
             << "time: " << std::setprecision(1) << result.time_ms << " ms registration + "
             << build_ms << " ms preparation (kd-tree"
             << (method.voxel_size || method.random_ratio ? ", downsampling" : "")
-            << (needs_reference_normals(method.sgd.cost) || needs_covariances(method.sgd.cost)
+            << (!method.stochastic && (needs_reference_normals(method.batch.cost) ||
+                                       needs_covariances(method.batch.cost))
                     ? ", normals/covariances"
                     : "")
             << ")\n";

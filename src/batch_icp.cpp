@@ -340,7 +340,7 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
                                const BatchSettings& settings, const Eigen::Matrix4d& T_init) {
   const detail::Stopwatch clock;
   settings.validate();
-  detail::check_pair(reference, settings.cost, T_init);
+  detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::eager);
   const detail::PairFrame frame(reference);
   const detail::PreparedSource src(source, frame.origin_m(), settings.cost, settings.neighborhood,
                                    BatchPairing::kMinPairs, "the minimum of");

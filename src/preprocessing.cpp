@@ -14,6 +14,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
 
 namespace sgdicp {
@@ -114,10 +115,7 @@ void parallel_chunks(std::size_t n, std::size_t threads, const Body& body) {
   }
 }
 
-struct PointSurface {
-  Eigen::Vector3f normal;      // unit and facing the viewpoint, or zero when degenerate
-  Eigen::Matrix3f covariance;  // raw (m^2) or regularized (unitless)
-};
+using detail::PointSurface;
 
 // The neighbourhood summary of one point. Pure function of its inputs, hence identical
 // results for any thread count.
@@ -170,21 +168,15 @@ PointSurface describe(const Eigen::Vector3f& point, const std::vector<Eigen::Vec
 
 void estimate(PointCloud& cloud, const ReferenceIndex& index, const NeighborhoodSettings& settings,
               bool with_covariances) {
-  // The viewpoint is given in the cloud's frame, the points are stored from its origin.
-  NeighborhoodSettings stored = settings;
-  stored.viewpoint = (settings.viewpoint.cast<double>() - cloud.origin_m).cast<float>();
+  const NeighborhoodSettings stored = detail::in_stored_frame(settings, cloud);
   const std::size_t n = cloud.size();
-  const std::vector<Eigen::Vector3f>& points = index.cloud().points;
   std::vector<Eigen::Vector3f> normals(n);
   std::vector<Eigen::Matrix3f> covariances(with_covariances ? n : 0);
-  const std::size_t k = std::min(settings.k, n);
   parallel_chunks(n, resolve_threads(settings.num_threads, n),
                   [&](std::size_t begin, std::size_t end) {
                     std::vector<Neighbor> neighbors;  // one per thread, reused
-                    neighbors.reserve(k);
                     for (std::size_t i = begin; i < end; ++i) {
-                      index.k_nearest(points[i], k, neighbors);
-                      const PointSurface s = describe(points[i], points, neighbors, stored);
+                      const PointSurface s = detail::estimate_surface(index, i, stored, neighbors);
                       normals[i] = s.normal;
                       if (with_covariances) covariances[i] = s.covariance;
                     }
@@ -265,6 +257,25 @@ void validate_attributes(const PointCloud& cloud) {
 }
 
 }  // namespace
+
+namespace detail {
+
+NeighborhoodSettings in_stored_frame(const NeighborhoodSettings& settings,
+                                     const PointCloud& cloud) {
+  NeighborhoodSettings stored = settings;
+  stored.viewpoint = (settings.viewpoint.cast<double>() - cloud.origin_m).cast<float>();
+  return stored;
+}
+
+PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
+                              const NeighborhoodSettings& stored,
+                              std::vector<Neighbor>& neighbors) {
+  const std::vector<Eigen::Vector3f>& points = index.cloud().points;
+  index.k_nearest(points[i], std::min(stored.k, points.size()), neighbors);
+  return describe(points[i], points, neighbors, stored);
+}
+
+}  // namespace detail
 
 void NeighborhoodSettings::validate() const {
   check_neighborhood(*this);

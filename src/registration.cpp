@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/evaluation.hpp"
 #include "sgdicp/pose.hpp"
@@ -31,13 +32,17 @@ struct Pair {
 
 // Algorithm 1, lines 3-8: each point of a mini-batch moved by the current pose, paired with its
 // nearest reference point within d_max, added to the mini-batch cost. The tree lives in metres,
-// the pose in the scaled space.
+// the pose in the scaled space. The normals and covariances a cost needs come from the clouds or
+// are estimated for the pairs that use them (point_surfaces.hpp).
 class MiniBatchPairing {
  public:
-  MiniBatchPairing(const PointCloud& source, const ReferenceIndex& reference,
-                   const UnitCubeScaling& scaling, const SgdSettings& settings)
+  MiniBatchPairing(const PointCloud& source, const ReferenceIndex* source_index,
+                   const ReferenceIndex& reference, const UnitCubeScaling& scaling,
+                   const SgdSettings& settings)
       : source_(source),
         reference_(reference),
+        reference_surfaces_(reference, settings.neighborhood),
+        source_surfaces_(source, source_index, settings.neighborhood),
         scaling_(scaling),
         settings_(settings),
         kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())),
@@ -110,22 +115,31 @@ class MiniBatchPairing {
 
   // Any cost of cost.hpp with its kernel: rho(e^T Omega e).
   void add_general(const EulerPoseJacobian& pose, CostAccumulator& cost,
-                   std::vector<float>& distances) const {
+                   std::vector<float>& distances) {
     const PointCloud& ref = reference_.cloud();
     for (const Pair& pair : pairs_) {
       const Eigen::Vector3d r = scaling_.to_scaled(ref.points[pair.reference_index]);
-      const Eigen::Matrix3d omega = information_matrix(
-          settings_.cost, ref.has_normals() ? ref.normals[pair.reference_index] : kNoNormal,
-          ref.has_covariances() ? ref.covariances[pair.reference_index] : kNoCovariance,
-          source_.has_covariances() ? source_.covariances[pair.source_index] : kNoCovariance,
-          pose.rotation());
-      cost.add(pose.jacobian(pair.s), pair.moved - r, omega);
+      cost.add(pose.jacobian(pair.s), pair.moved - r, information(pair, pose.rotation()));
       distances.push_back(pair.distance);
     }
   }
 
+  // Omega of a pair (cost.hpp), with only what the cost reads looked up or estimated.
+  Eigen::Matrix3d information(const Pair& pair, const Eigen::Matrix3d& rotation) {
+    const CostType type = settings_.cost;
+    const bool plane_to_plane = needs_covariances(type);
+    return information_matrix(
+        type,
+        needs_reference_normals(type) ? reference_surfaces_.normal(pair.reference_index)
+                                      : kNoNormal,
+        plane_to_plane ? reference_surfaces_.covariance(pair.reference_index) : kNoCovariance,
+        plane_to_plane ? source_surfaces_.covariance(pair.source_index) : kNoCovariance, rotation);
+  }
+
   const PointCloud& source_;
   const ReferenceIndex& reference_;
+  detail::PointSurfaces reference_surfaces_;
+  detail::PointSurfaces source_surfaces_;
   const UnitCubeScaling& scaling_;
   const SgdSettings& settings_;
   double kernel_scale_;  // scaled
@@ -136,11 +150,12 @@ class MiniBatchPairing {
 // One SGD-ICP run in the scaled space: Algorithm 1, then the refinement stages.
 class SgdRun {
  public:
-  SgdRun(const PointCloud& source, const ReferenceIndex& reference, const SgdSettings& settings,
+  SgdRun(const PointCloud& source, const ReferenceIndex* source_index,
+         const ReferenceIndex& reference, const SgdSettings& settings,
          const UnitCubeScaling& scaling)
       : settings_(settings),
         scaling_(scaling),
-        pairing_(source, reference, scaling, settings),
+        pairing_(source, source_index, reference, scaling, settings),
         sampler_(static_cast<std::uint32_t>(source.size()), settings.seed),
         optimizer_(settings.optimizer),
         monitor_(settings.convergence),
@@ -234,15 +249,16 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
   const detail::Stopwatch clock;
   settings.validate();
-  detail::check_pair(reference, settings.cost, T_init);
+  detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::lazy);
   const detail::PairFrame frame(reference);
   const detail::PreparedSource src(source, frame.origin_m(), settings.cost, settings.neighborhood,
-                                   settings.batch_size, "the mini-batch size");
+                                   settings.batch_size, "the mini-batch size",
+                                   detail::SurfaceEstimation::lazy);
   RegistrationResult result;
   const UnitCubeScaling scaling = detail::scaling_of(
       src.cloud(), reference, settings.scaling_origin, settings.robust_scaling, result);
   result.scale_m = scaling.scale();
-  SgdRun run(src.cloud(), reference, settings, scaling);
+  SgdRun run(src.cloud(), src.index(), reference, settings, scaling);
   // Matrices read from text carry few digits: project onto the nearest rotation.
   const PoseVector theta_init =
       pose_from_transform(scaling.to_scaled(frame.to_stored(orthonormalized(T_init))));
@@ -258,8 +274,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
 RegistrationResult align(const PointCloud& source, const PointCloud& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
   settings.validate();
-  return align(source, detail::index_for(reference, settings.cost, settings.neighborhood), settings,
-               T_init);
+  // The normals and covariances the cost needs are estimated in the run, for the pairs it uses.
+  return align(source, ReferenceIndex(reference), settings, T_init);
 }
 
 }  // namespace sgdicp

@@ -31,34 +31,47 @@ class Stopwatch {
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
 };
 
+/// When the costs' normals and covariances that the clouds lack are estimated: for every point
+/// before the run, or for the points the run touches, on first use (point_surfaces.hpp).
+enum class SurfaceEstimation { eager, lazy };
+
 /// The source of a registration, checked, with the covariances plane-to-plane needs estimated
-/// here (and so timed with the registration) when it lacks them.
+/// here (and so timed with the registration) when it lacks them: every point's (eager), or a
+/// KD-tree over the source for PointSurfaces to estimate them on first use (lazy).
 class PreparedSource {
  public:
   /// `origin_m`: the origin of the pair's frame (PairFrame); a source stored relative to
   /// another origin is re-based onto it (a copy, only then).
   PreparedSource(const PointCloud& source, const Eigen::Vector3d& origin_m, CostType cost,
                  const NeighborhoodSettings& neighborhood, std::size_t min_points,
-                 const std::string& why_min)
+                 const std::string& why_min, SurfaceEstimation when = SurfaceEstimation::eager)
       : cloud_(&source) {
     check_source(source, min_points, why_min);
     if (source.origin_m != origin_m) {
       copy_ = rebased(source, origin_m);
       cloud_ = &*copy_;
     }
-    if (needs_covariances(cost) && !cloud_->has_covariances()) {
-      if (!copy_) copy_ = source;
+    if (!needs_covariances(cost) || cloud_->has_covariances()) return;
+    if (!copy_) copy_ = source;
+    if (when == SurfaceEstimation::eager) {
       estimate_covariances(*copy_, neighborhood);
       cloud_ = &*copy_;
+    } else {
+      index_.emplace(std::move(*copy_));
+      copy_.reset();
+      cloud_ = &index_->cloud();
     }
   }
   PreparedSource(const PreparedSource&) = delete;
   PreparedSource& operator=(const PreparedSource&) = delete;
 
   [[nodiscard]] const PointCloud& cloud() const noexcept { return *cloud_; }
+  /// The KD-tree over cloud() for lazily estimated covariances, or null when none are needed.
+  [[nodiscard]] const ReferenceIndex* index() const noexcept { return index_ ? &*index_ : nullptr; }
 
  private:
-  std::optional<PointCloud> copy_;  // re-based, or with the covariances estimated here
+  std::optional<PointCloud> copy_;       // re-based, or with the covariances estimated here
+  std::optional<ReferenceIndex> index_;  // lazy: over the source, owning its points
   const PointCloud* cloud_;
 };
 
@@ -86,12 +99,12 @@ class PairFrame {
   Eigen::Vector3d origin_m_;
 };
 
-/// Checks what every solver needs besides the source: a rigid initial transform and the
-/// reference's normals or covariances for the cost.
+/// Checks what every solver needs besides the source: a rigid initial transform and, unless
+/// estimated on first use, the reference's normals or covariances for the cost.
 inline void check_pair(const ReferenceIndex& reference, CostType cost,
-                       const Eigen::Matrix4d& T_init) {
+                       const Eigen::Matrix4d& T_init, SurfaceEstimation when) {
   check_initial_transform(T_init);
-  check_reference_prepared(reference, cost);
+  if (when == SurfaceEstimation::eager) check_reference_prepared(reference, cost);
 }
 
 /// The bulk of a cloud must lie within 1e9 m of its origin (no place on Earth is farther from a

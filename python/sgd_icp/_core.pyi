@@ -875,8 +875,8 @@ def register(
     ------
     InvalidInputError (ValueError)
         A wrong shape or dtype, no finite points, fewer source points than batch_size, a non-rigid
-        init, a ReferenceIndex without the normals or covariances of the method's cost (build it
-        with ReferenceIndex(points, cost=...)).
+        init, a ReferenceIndex without the normals or covariances of a batch method's cost (build
+        it with ReferenceIndex(points, cost=...); the SGD methods estimate what they use).
     InvalidSettingsError (ValueError)
         An invalid setting or method name.
     TypeError

@@ -229,19 +229,24 @@ BatchSettings batch_settings_or_default(const py::handle& settings, const Method
   return settings.cast<BatchSettings>();
 }
 
-/// Registration with either solver: the index (given, or built with the normals or covariances
-/// `cost` needs), then `run(index)` with the GIL released.
+/// How a solver gets the normals or covariances its cost needs: the SGD solver estimates them
+/// in the run for the pairs it uses, the batch solver needs them in the index beforehand.
+enum class Surfaces { in_run, in_index };
+
+/// Registration with either solver: the index (given, or built, with the normals or covariances
+/// `cost` needs when the solver wants them there), then `run(index)` with the GIL released.
 template <typename Run>
 Result register_with(const ConvertedCloud& src, const py::handle& reference, CostType cost,
-                     const NeighborhoodSettings& neighborhood, Run run) {
+                     const NeighborhoodSettings& neighborhood, Surfaces surfaces, Run run) {
   std::shared_ptr<const SharedIndex> index;
   double build_ms = 0.0;
   if (py::isinstance<SharedIndex>(reference)) {
     index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during the run
-    check_prepared(*index, cost);
+    if (surfaces == Surfaces::in_index) check_prepared(*index, cost);
   } else {
-    auto built = build_index(cloud_from_array(reference, "reference", NonFinite::drop),
-                             KdTreeSettings{}.leaf_size, cost, neighborhood);
+    auto built = build_index(
+        cloud_from_array(reference, "reference", NonFinite::drop), KdTreeSettings{}.leaf_size,
+        surfaces == Surfaces::in_index ? cost : CostType::point_to_point, neighborhood);
     build_ms = built->build_ms;
     index = std::move(built);
   }
@@ -274,9 +279,9 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
     const Eigen::Matrix4d T_init =
         init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
     const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
-    return register_with(src, reference, s.cost, s.neighborhood, [&](const ReferenceIndex& index) {
-      return align(src.cloud, index, s, T_init);
-    });
+    return register_with(
+        src, reference, s.cost, s.neighborhood, Surfaces::in_run,
+        [&](const ReferenceIndex& index) { return align(src.cloud, index, s, T_init); });
   }
   BatchSettings base = batch_settings_or_default(settings, m);
   base.cost = *m.cost;
@@ -284,9 +289,9 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
   const Eigen::Matrix4d T_init =
       init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
   const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
-  return register_with(src, reference, b.cost, b.neighborhood, [&](const ReferenceIndex& index) {
-    return align_batch(src.cloud, index, b, T_init);
-  });
+  return register_with(
+      src, reference, b.cost, b.neighborhood, Surfaces::in_index,
+      [&](const ReferenceIndex& index) { return align_batch(src.cloud, index, b, T_init); });
 }
 
 // ---- file I/O
@@ -378,8 +383,8 @@ Raises
 ------
 InvalidInputError (ValueError)
     A wrong shape or dtype, no finite points, fewer source points than batch_size, a non-rigid
-    init, a ReferenceIndex without the normals or covariances of the method's cost (build it
-    with ReferenceIndex(points, cost=...)).
+    init, a ReferenceIndex without the normals or covariances of a batch method's cost (build
+    it with ReferenceIndex(points, cost=...); the SGD methods estimate what they use).
 InvalidSettingsError (ValueError)
     An invalid setting or method name.
 TypeError

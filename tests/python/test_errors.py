@@ -149,7 +149,7 @@ def test_method_is_not_a_setting():
         sgd_icp.Settings(method="sgd-plane")
 
 
-def test_plane_costs_need_a_prepared_index():
+def test_batch_plane_costs_need_a_prepared_index():
     index = sgd_icp.ReferenceIndex(GOOD)
     assert not index.has_normals and not index.has_covariances
     with pytest.raises(
@@ -157,11 +157,21 @@ def test_plane_costs_need_a_prepared_index():
         match=r"point-to-plane cost needs reference normals: build the "
         r"index with ReferenceIndex\(points, cost='point-to-plane'\)",
     ):
-        sgd_icp.register(GOOD, index, cost="point-to-plane")
+        sgd_icp.register(GOOD, index, method="icp-plane")
     with pytest.raises(ValueError, match="plane-to-plane cost needs reference covariances"):
-        sgd_icp.register(GOOD, index, cost="plane-to-plane")
+        sgd_icp.register(GOOD, index, method="gicp")
     with pytest.raises(ValueError, match="unknown cost"):
         sgd_icp.ReferenceIndex(GOOD, cost="plane")
+
+
+def test_sgd_plane_costs_estimate_what_they_use():
+    # The SGD solver estimates the normals / covariances of the points its mini-batches reach,
+    # with the estimator of a prepared index: the same result either way.
+    for cost in ("point-to-plane", "plane-to-plane"):
+        bare = sgd_icp.register(GOOD, sgd_icp.ReferenceIndex(GOOD), cost=cost)
+        prepared = sgd_icp.register(GOOD, sgd_icp.ReferenceIndex(GOOD, cost=cost), cost=cost)
+        np.testing.assert_array_equal(bare.T_reference_source, prepared.T_reference_source)
+        assert bare.converged
 
 
 def test_settings_argument_must_be_settings():

@@ -114,17 +114,27 @@ def test_method_errors(small_scene):
     "method, message",
     [
         ("icp-plane", "point-to-plane cost needs reference normals"),
-        ("sgd-plane", "point-to-plane cost needs reference normals"),
         ("gicp", "plane-to-plane cost needs reference covariances"),
-        ("sgd-gicp", "plane-to-plane cost needs reference covariances"),
     ],
 )
-def test_plane_methods_need_a_prepared_index(small_scene, method, message):
+def test_batch_plane_methods_need_a_prepared_index(small_scene, method, message):
     source, reference, _ = small_scene
     index = sgd_icp.ReferenceIndex(reference[:2000])
     with pytest.raises(sgd_icp.InvalidInputError, match=message):
         sgd_icp.register(source[:2000], index, method=method)
     assert not index.has_normals  # a registration never changes a shared index
+
+
+@pytest.mark.parametrize("method", ["sgd-plane", "sgd-gicp"])
+def test_sgd_plane_methods_estimate_what_they_use(small_scene, method):
+    # The SGD methods estimate the normals / covariances their mini-batches reach, during the
+    # run: a bare index gives the result of the arrays, and stays as it was.
+    source, reference, _ = small_scene
+    index = sgd_icp.ReferenceIndex(reference[:2000])
+    with_index = sgd_icp.register(source[:2000], index, method=method)
+    with_array = sgd_icp.register(source[:2000], reference[:2000], method=method)
+    np.testing.assert_array_equal(with_index.T_reference_source, with_array.T_reference_source)
+    assert not index.has_normals and not index.has_covariances
 
 
 # ---- BatchSettings
