@@ -32,7 +32,7 @@ struct BenchOptions {
   std::vector<std::string> pairs_files;
   std::string perturb;
   std::size_t repeat = 1;
-  std::size_t threads = 1;
+  std::size_t jobs = 1;
   std::string csv;
   std::vector<std::string> success = {"0.05,1", "2,5"};
   SettingsOptions settings;
@@ -356,7 +356,7 @@ void run(const BenchOptions& o) {
     }
   };
 
-  const std::size_t threads = std::min(o.threads, std::max<std::size_t>(total, 1));
+  const std::size_t threads = std::min(o.jobs, std::max<std::size_t>(total, 1));
   if (threads <= 1) {
     for (std::size_t task = 0; task < total; ++task) emit(run_task(task), task);
   } else {
@@ -437,10 +437,11 @@ void add_bench_command(CLI::App& app) {
   cmd->add_option("--repeat", o->repeat,
                   "Registrations per pair; repeat r uses seed + r (and its own perturbation) "
                   "[default: 1]");
-  cmd->add_option("--threads", o->threads,
+  cmd->add_option("-j,--jobs", o->jobs,
                   "Registrations run in parallel, each on its own thread with its own KD-tree "
                   "(throughput; the per-registration times then include contention for cores "
-                  "and memory bandwidth). Rows are still printed in pair order [default: 1]")
+                  "and memory bandwidth; --threads is the threads of each registration). Rows "
+                  "are still printed in pair order [default: 1]")
       ->check(CLI::Range(std::size_t{1}, std::size_t{256}));
   cmd->add_option("--csv", o->csv, "Write one CSV row per registration to this file");
   cmd->add_option("--success", o->success,

@@ -253,7 +253,8 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
   std::optional<PointCloud> small_source;
   if (reduced) small_source = reduce(source);
   const PointCloud& src = small_source ? *small_source : source;
-  ReferenceIndex index(reduced ? reduce(reference) : reference);
+  const KdTreeSettings tree{.num_threads = m.stochastic ? m.sgd.num_threads : m.batch.num_threads};
+  ReferenceIndex index(reduced ? reduce(reference) : reference, tree);
   // align() estimates the normals or covariances of its cost for the pairs it uses; the batch
   // solver needs them for every reference point beforehand.
   if (!m.stochastic) prepare_reference(index, m.batch.cost, m.batch.neighborhood);

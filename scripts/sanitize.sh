@@ -8,7 +8,7 @@
 #         TSan build of everything would double the stage for tests that start no thread):
 #         8 threads on one ReferenceIndex (test_stress Load.*), concurrent KD-tree queries,
 #         concurrent registrations on a shared index, normals and covariances on 1-4 threads
-#         (the only std::jthread pool of the library), and `sgdicp bench --threads 2`.
+#         (the only std::jthread pool of the library), and `sgdicp bench --jobs 2`.
 # Both use RelWithDebInfo at -O1 (sanitized -O0 ran the suite several times slower; -O1 keeps
 # the stacks readable). The load and soak tests run a fifth and a tenth of their work when
 # sanitized (tests/test_stress.cpp). Builds use ${SANITIZE_JOBS:-2} jobs.
@@ -67,7 +67,7 @@ tsan_bench() {  # the demo pair, twice per method, on two threads
   { printf '%s %s ' "$PWD/data/demo/car_cloud401.csv" "$PWD/data/demo/car_cloud400.csv"
     head -n 3 data/demo/T_gt.txt | tr '\n' ' '
     echo; } >"$pairs"
-  build-tsan/sgdicp bench "$pairs" --method sgd,icp,gicp --repeat 2 --threads 2 >/dev/null
+  build-tsan/sgdicp bench "$pairs" --method sgd,icp,gicp --repeat 2 --jobs 2 >/dev/null
 }
 
 run_tsan() {
@@ -75,7 +75,7 @@ run_tsan() {
   stage "tsan build" cmake --build build-tsan -j"$jobs" --target "${TSAN_TARGETS[@]}"
   export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
   stage "tsan tests" ctest --test-dir build-tsan --output-on-failure -j"$jobs" -R "$TSAN_TESTS"
-  stage "tsan bench --threads 2" tsan_bench
+  stage "tsan bench --jobs 2" tsan_bench
 }
 
 case "$mode" in

@@ -362,8 +362,10 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
 RegistrationResult align_batch(const PointCloud& source, const PointCloud& reference,
                                const BatchSettings& settings, const Eigen::Matrix4d& T_init) {
   settings.validate();
-  return align_batch(source, detail::index_for(reference, settings.cost, settings.neighborhood),
-                     settings, T_init);
+  return align_batch(
+      source,
+      detail::index_for(reference, settings.cost, settings.neighborhood, settings.num_threads),
+      settings, T_init);
 }
 
 }  // namespace sgdicp

@@ -1,13 +1,17 @@
 #include "sgdicp/nearest_neighbor.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include <nanoflann.hpp>
 
 #include "sgdicp/error.hpp"
 #include "sgdicp/preprocessing.hpp"
+#include "sgdicp/threads.hpp"
 
 namespace sgdicp {
 namespace {
@@ -65,6 +69,137 @@ class NearestWithin {
   bool found_ = false;
 };
 
+// nanoflann 1.4 builds its tree on one thread. Below its top splits the subtrees cover disjoint
+// ranges of the index array, so they can be built at once, each on a thread of its own, into the
+// node pool of a helper tree (nanoflann's pool is not thread-safe) that works on a copy of the
+// index array and hands its range back. The splits are nanoflann's own (middleSplit_), made in
+// the same order on the same data, and the epilogue is divideTree's: the tree is the one
+// buildIndex() makes, node for node (test: ReferenceIndex.ThreadedBuildGivesTheSameTree).
+class ThreadedBuild {
+ public:
+  using Node = KdTree::Node;
+  using Box = KdTree::BoundingBox;
+  using Offset = KdTree::Offset;
+
+  ThreadedBuild(KdTree& tree, const CloudAdaptor& adaptor, std::size_t leaf_size)
+      : tree_(tree), adaptor_(adaptor), leaf_size_(leaf_size) {}
+
+  // buildIndex() with the subtrees below `levels` top splits built on `threads` threads; the
+  // helper trees that own their nodes go into `pools`, which must outlive the tree.
+  void run(std::size_t levels, std::size_t threads, std::vector<std::unique_ptr<KdTree>>& pools) {
+    tree_.m_size = adaptor_.kdtree_get_point_count();
+    tree_.init_vind();
+    tree_.freeIndex(tree_);
+    tree_.m_size_at_index_build = tree_.m_size;
+    tree_.computeBoundingBox(tree_.root_bbox);
+    Part root(0, tree_.m_size, tree_.root_bbox);
+    std::vector<Part*> subtrees;
+    split(root, levels, subtrees);
+    build(subtrees, threads);
+    for (Part* part : subtrees) {
+      std::copy(part->pool->vAcc.begin() + static_cast<std::ptrdiff_t>(part->left),
+                part->pool->vAcc.begin() + static_cast<std::ptrdiff_t>(part->right),
+                tree_.vAcc.begin() + static_cast<std::ptrdiff_t>(part->left));
+      pools.push_back(std::move(part->pool));
+    }
+    finish(root);
+    tree_.root_node = root.node;
+    tree_.root_bbox = root.box;
+  }
+
+ private:
+  // A node of the top levels (with children) or a subtree below them (with a helper pool).
+  struct Part {
+    Part(Offset first, Offset last, const Box& cell) : left(first), right(last), box(cell) {}
+    Offset left, right;
+    Box box;  // in: the cell of the split; out: the tight box of the points (divideTree's)
+    Node* node = nullptr;
+    std::unique_ptr<Part> child1, child2;
+    std::unique_ptr<KdTree> pool;
+  };
+
+  // divideTree's prologue for the top levels: the split, without descending.
+  void split(Part& part, std::size_t levels, std::vector<Part*>& subtrees) {
+    if (levels == 0 || part.right - part.left <= leaf_size_) {
+      subtrees.push_back(&part);
+      return;
+    }
+    part.node = tree_.pool.template allocate<Node>();
+    Offset idx = 0;
+    int cutfeat = 0;
+    float cutval = 0.0F;
+    tree_.middleSplit_(tree_, part.left, part.right - part.left, idx, cutfeat, cutval, part.box);
+    part.node->node_type.sub.divfeat = cutfeat;
+    part.child1 = std::make_unique<Part>(part.left, part.left + idx, part.box);
+    part.child1->box[static_cast<std::size_t>(cutfeat)].high = cutval;
+    part.child2 = std::make_unique<Part>(part.left + idx, part.right, part.box);
+    part.child2->box[static_cast<std::size_t>(cutfeat)].low = cutval;
+    split(*part.child1, levels - 1, subtrees);
+    split(*part.child2, levels - 1, subtrees);
+  }
+
+  // The subtrees, largest first, each on the least loaded of `threads` threads (the caller's is
+  // the first).
+  void build(std::vector<Part*> subtrees, std::size_t threads) {
+    std::sort(subtrees.begin(), subtrees.end(),
+              [](const Part* a, const Part* b) { return a->right - a->left > b->right - b->left; });
+    std::vector<std::vector<Part*>> work(threads);
+    std::vector<Offset> load(threads, 0);
+    for (Part* part : subtrees) {
+      const auto t =
+          static_cast<std::size_t>(std::min_element(load.begin(), load.end()) - load.begin());
+      work[t].push_back(part);
+      load[t] += part->right - part->left;
+    }
+    const auto build_all = [this](const std::vector<Part*>& parts) {
+      for (Part* part : parts) build_subtree(*part);
+    };
+    {
+      std::vector<std::jthread> workers;
+      for (std::size_t t = 1; t < threads; ++t) workers.emplace_back(build_all, work[t]);
+      build_all(work[0]);
+    }
+  }
+
+  void build_subtree(Part& part) const {
+    part.pool = std::make_unique<KdTree>(
+        3, adaptor_,
+        nanoflann::KDTreeSingleIndexAdaptorParams(
+            leaf_size_, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex));
+    part.pool->vAcc = tree_.vAcc;  // read-only for every thread until all have joined
+    part.node = part.pool->divideTree(*part.pool, part.left, part.right, part.box);
+  }
+
+  // divideTree's epilogue for the top levels, once their subtrees exist.
+  static void finish(Part& part) {
+    if (!part.child1) return;
+    finish(*part.child1);
+    finish(*part.child2);
+    Node& node = *part.node;
+    node.child1 = part.child1->node;
+    node.child2 = part.child2->node;
+    const auto cutfeat = static_cast<std::size_t>(node.node_type.sub.divfeat);
+    node.node_type.sub.divlow = part.child1->box[cutfeat].high;
+    node.node_type.sub.divhigh = part.child2->box[cutfeat].low;
+    for (std::size_t i = 0; i < 3; ++i) {
+      part.box[i].low = std::min(part.child1->box[i].low, part.child2->box[i].low);
+      part.box[i].high = std::max(part.child1->box[i].high, part.child2->box[i].high);
+    }
+  }
+
+  KdTree& tree_;
+  const CloudAdaptor& adaptor_;
+  std::size_t leaf_size_;
+};
+
+// Fewer points than this per thread do not repay a thread start (~50 microseconds).
+constexpr std::size_t kMinPointsPerBuildThread = 16384;
+
+std::size_t build_threads(std::size_t requested, std::size_t points) {
+  return std::clamp<std::size_t>(points / kMinPointsPerBuildThread, 1,
+                                 resolve_thread_count(requested));
+}
+
 }  // namespace
 
 struct ReferenceIndex::Impl {
@@ -72,6 +207,7 @@ struct ReferenceIndex::Impl {
   BoundingBox box;
   CloudAdaptor adaptor;
   KdTree tree;
+  std::vector<std::unique_ptr<KdTree>> subtree_pools;  // nodes of a threaded build
   // The bulk box, for the registrations that scale robustly: once, on first use, from any thread.
   std::once_flag bulk_once;
   ScalingBox bulk;
@@ -80,7 +216,19 @@ struct ReferenceIndex::Impl {
       : cloud(std::move(reference)),
         box(BoundingBox::of(cloud)),
         adaptor{&cloud.points, &box},
-        tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(settings.leaf_size)) {}
+        tree(3, adaptor,
+             nanoflann::KDTreeSingleIndexAdaptorParams(
+                 settings.leaf_size,
+                 nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)) {
+    const std::size_t threads = build_threads(settings.num_threads, cloud.size());
+    if (threads == 1) {
+      tree.buildIndex();
+      return;
+    }
+    // Two subtrees per thread even the load out: the middle splits are not median splits.
+    const auto levels = static_cast<std::size_t>(std::bit_width(2 * threads - 1));
+    ThreadedBuild(tree, adaptor, settings.leaf_size).run(levels, threads, subtree_pools);
+  }
 };
 
 namespace {
@@ -100,8 +248,17 @@ PointCloud checked_reference(PointCloud reference) {
 }  // namespace
 
 ReferenceIndex::ReferenceIndex(PointCloud reference, const KdTreeSettings& settings) {
-  if (settings.leaf_size == 0) throw InvalidSettingsError("kd-tree leaf size must be at least 1");
+  settings.validate();
   impl_ = std::make_unique<Impl>(checked_reference(std::move(reference)), settings);
+}
+
+void KdTreeSettings::validate() const {
+  if (leaf_size == 0) throw InvalidSettingsError("kd-tree leaf size must be at least 1");
+  if (num_threads > kMaxThreads) {
+    throw InvalidSettingsError("kd-tree build threads must be at most " +
+                               std::to_string(kMaxThreads) + " (0 = all cores), got " +
+                               std::to_string(num_threads));
+  }
 }
 
 ReferenceIndex::~ReferenceIndex() = default;

@@ -16,13 +16,13 @@
 
 #include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
+#include "sgdicp/threads.hpp"
 
 namespace sgdicp {
 namespace {
 
 constexpr std::size_t kMinNeighbors = 3;
 constexpr std::size_t kMaxNeighbors = 1000;
-constexpr std::size_t kMaxThreads = 1024;
 // Fewer points per thread than this are not worth a thread start (~tens of microseconds).
 constexpr std::size_t kMinPointsPerThread = 512;
 // A neighbourhood whose second-largest eigenvalue is below this fraction of the largest is a
@@ -50,8 +50,8 @@ void check_neighborhood(const NeighborhoodSettings& settings) {
                                format_number(settings.epsilon));
   }
   if (settings.num_threads > kMaxThreads) {
-    throw InvalidSettingsError("number of threads must be at most 1024 (0 = all cores), got " +
-                               std::to_string(settings.num_threads));
+    throw InvalidSettingsError("number of threads must be at most " + std::to_string(kMaxThreads) +
+                               " (0 = all cores), got " + std::to_string(settings.num_threads));
   }
   if (!settings.viewpoint.allFinite()) {
     throw InvalidSettingsError("normal viewpoint must be finite");
@@ -86,8 +86,7 @@ void validate_index(const PointCloud& cloud, const ReferenceIndex& index) {
 }
 
 std::size_t resolve_threads(std::size_t requested, std::size_t num_points) {
-  std::size_t threads = requested != 0 ? requested : std::thread::hardware_concurrency();
-  threads = std::max<std::size_t>(threads, 1);
+  const std::size_t threads = resolve_thread_count(requested);
   const std::size_t useful = (num_points + kMinPointsPerThread - 1) / kMinPointsPerThread;
   return std::clamp<std::size_t>(useful, 1, threads);
 }

@@ -275,7 +275,9 @@ RegistrationResult align(const PointCloud& source, const PointCloud& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
   settings.validate();
   // The normals and covariances the cost needs are estimated in the run, for the pairs it uses.
-  return align(source, ReferenceIndex(reference), settings, T_init);
+  return align(source,
+               ReferenceIndex(reference, KdTreeSettings{.num_threads = settings.num_threads}),
+               settings, T_init);
 }
 
 }  // namespace sgdicp

@@ -1,11 +1,14 @@
 #include "sgdicp/settings.hpp"
 
+#include "sgdicp/threads.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <limits>
 #include <type_traits>
 
 #include "sgdicp/error.hpp"
+#include "sgdicp/threads.hpp"
 
 namespace sgdicp {
 
@@ -240,6 +243,7 @@ constexpr ValueRange kTrim{0.01, 1.0};
 constexpr ValueRange kIterations{1.0, 1e9};
 constexpr ValueRange kNeighbors{3.0, 1000.0};
 constexpr ValueRange kEvaluationPoints{0.0, 4294967295.0};
+constexpr ValueRange kThreads{0.0, static_cast<double>(kMaxThreads)};
 // batch_size x window pair distances are kept for the refinement (4 bytes each, twice).
 constexpr double kMaxWindowPairs = 1e8;
 
@@ -251,6 +255,9 @@ constexpr std::string_view kKernelScaleHelp =
 constexpr std::string_view kTrimHelp =
     "Keep only this fraction of the pairs (per mini-batch for SGD, per iteration for batch "
     "methods), the closest ones: trimmed ICP for partial overlap";
+constexpr std::string_view kThreadsHelp =
+    "Threads of one registration (today: its KD-tree build), 0 = every core; the result is the "
+    "same for any count";
 constexpr std::string_view kNeighborsHelp =
     "Plane costs: neighbours per point (itself included) for normals and covariances";
 constexpr std::string_view kEvaluationHelp =
@@ -413,6 +420,7 @@ std::vector<Setting<S>> result_and_pair_settings() {
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
       setting<S, &S::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
       setting<S, &S::robust_scaling>(
           {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
@@ -455,6 +463,7 @@ std::vector<Setting<B>> make_batch_table() {
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
       setting<B, &B::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
       setting<B, &B::robust_scaling>(
           {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),

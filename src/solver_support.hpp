@@ -165,8 +165,9 @@ inline void conclude(RegistrationResult& result, const PointCloud& source,
 /// The index of a reference given as a cloud, with what the cost needs (the convenience
 /// overloads of align() and align_batch()).
 [[nodiscard]] inline ReferenceIndex index_for(const PointCloud& reference, CostType cost,
-                                              const NeighborhoodSettings& neighborhood) {
-  ReferenceIndex index(reference);
+                                              const NeighborhoodSettings& neighborhood,
+                                              std::size_t num_threads) {
+  ReferenceIndex index(reference, KdTreeSettings{.num_threads = num_threads});
   prepare_reference(index, cost, neighborhood);
   return index;
 }

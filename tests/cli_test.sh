@@ -570,21 +570,30 @@ expect_error "an unknown method in a bench list" 'unknown method' \
   bench "$tmp/pairs_dir/pairs.txt" --method sgd,magic
 expect_error "--trim 0" 'trim' register "$MOVED" "$REF" --trim 0
 expect_error "--voxel-size -1" 'voxel' register "$MOVED" "$REF" --voxel-size -1
-# --threads: the same registrations (same seeds, so the same errors), printed in the same order.
+# --jobs: the same registrations (same seeds, so the same errors), printed in the same order.
 run bench "$tmp/pairs_dir/pairs.txt" --method sgd,icp --repeat 3 --csv "$tmp/seq.csv"
-run bench "$tmp/pairs_dir/pairs.txt" --method sgd,icp --repeat 3 --threads 2 --csv "$tmp/par.csv"
+run bench "$tmp/pairs_dir/pairs.txt" --method sgd,icp --repeat 3 --jobs 2 --csv "$tmp/par.csv"
 if [ "$rc" -eq 0 ] && grep -q 'throughput: 6 registrations .* on 2 thread' "$tmp/out" &&
   [ "$(cut -d, -f1-10 "$tmp/seq.csv")" = "$(cut -d, -f1-10 "$tmp/par.csv")" ]; then
-  pass "bench --threads 2 gives the rows of a sequential run, in order, and its throughput"
+  pass "bench --jobs 2 gives the rows of a sequential run, in order, and its throughput"
 else
-  fail "bench --threads 2 (exit $rc): $(diff <(cut -d, -f1-10 "$tmp/seq.csv") \
+  fail "bench --jobs 2 (exit $rc): $(diff <(cut -d, -f1-10 "$tmp/seq.csv") \
     <(cut -d, -f1-10 "$tmp/par.csv") | head -c 400) $(head -c 300 "$tmp/err")"
 fi
-expect_error "bench --threads 0" 'threads' bench "$tmp/pairs_dir/pairs.txt" --threads 0
+expect_error "bench --jobs 0" 'jobs' bench "$tmp/pairs_dir/pairs.txt" --jobs 0
 cp "$tmp/pairs_dir/pairs.txt" "$tmp/pairs_dir/pairs_bad.txt"
 printf 'missing.xyz ../ref_copy.xyz 1 0 0 0 0 1 0 0 0 0 1 0\n' >>"$tmp/pairs_dir/pairs_bad.txt"
-expect_error "bench --threads 2 with a missing cloud in the second pair" 'missing|no such|cannot' \
-  bench "$tmp/pairs_dir/pairs_bad.txt" --threads 2 --repeat 4
+expect_error "bench --jobs 2 with a missing cloud in the second pair" 'missing|no such|cannot' \
+  bench "$tmp/pairs_dir/pairs_bad.txt" --jobs 2 --repeat 4
+# --threads: the threads of one registration (its KD-tree build) give the same result.
+run bench "$tmp/pairs_dir/pairs.txt" --method sgd,sgd-plane --repeat 2 --threads 2 --csv "$tmp/thr.csv"
+run bench "$tmp/pairs_dir/pairs.txt" --method sgd,sgd-plane --repeat 2 --threads 1 --csv "$tmp/thr1.csv"
+if [ "$rc" -eq 0 ] && [ "$(cut -d, -f1-10 "$tmp/thr1.csv")" = "$(cut -d, -f1-10 "$tmp/thr.csv")" ]; then
+  pass "bench --threads 2 (threads per registration) gives the results of --threads 1"
+else
+  fail "bench --threads 2 vs 1 (exit $rc): $(head -c 300 "$tmp/err")"
+fi
+expect_error "register --threads 2000" 'threads' register "$MOVED" "$REF" --threads 2000
 run bench "$tmp/pairs_dir/pairs.txt" --method sgd,icp,gicp --csv "$tmp/methods.csv"
 if [ "$rc" -eq 0 ] && grep -q '^method ' "$tmp/out" && [ "$(grep -c . "$tmp/methods.csv")" -eq 4 ]; then
   pass "bench --method sgd,icp,gicp prints one comparison table and one CSV row per method"

@@ -12,6 +12,7 @@
 
 #include "sgdicp/error.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -282,3 +283,47 @@ TEST(NearestNeighbor, NonFinitePointThrows) {
 }
 
 }  // namespace
+
+namespace sgdicp {
+namespace {
+
+// The threaded build splits the top of the tree on the calling thread and builds the subtrees
+// below on others (nearest_neighbor.cpp): the same tree as nanoflann's own build, so every
+// query gives the same neighbour at the same distance, ties included.
+TEST(ReferenceIndex, ThreadedBuildGivesTheSameTree) {
+  std::mt19937_64 rng(77);
+  PointCloud cloud;
+  std::normal_distribution<float> spread(0.0F, 3.0F);  // dense core, sparse rim: uneven splits
+  for (int i = 0; i < 150000; ++i) cloud.points.emplace_back(spread(rng), spread(rng), spread(rng));
+  for (int i = 0; i < 2000; ++i) cloud.points.push_back(cloud.points[static_cast<std::size_t>(i)]);
+  const ReferenceIndex one(cloud, KdTreeSettings{.num_threads = 1});
+  std::vector<Neighbor> expected, got;
+  for (const std::size_t threads : {2U, 3U, 4U, 7U}) {
+    const ReferenceIndex many(cloud, KdTreeSettings{.num_threads = threads});
+    std::mt19937_64 queries(5);
+    for (int q = 0; q < 3000; ++q) {
+      const Eigen::Vector3f p(spread(queries), spread(queries), spread(queries));
+      const auto a = one.nearest(p, 4.0F);
+      const auto b = many.nearest(p, 4.0F);
+      ASSERT_EQ(a.has_value(), b.has_value()) << threads;
+      if (a) {
+        EXPECT_EQ(a->index, b->index) << threads;
+        EXPECT_EQ(a->squared_distance, b->squared_distance) << threads;
+      }
+      one.k_nearest(p, 12, expected);
+      many.k_nearest(p, 12, got);
+      ASSERT_EQ(expected.size(), got.size());
+      for (std::size_t k = 0; k < got.size(); ++k) EXPECT_EQ(expected[k].index, got[k].index);
+    }
+  }
+}
+
+TEST(ReferenceIndex, BuildThreadsAreChecked) {
+  const PointCloud cloud = test::synthetic_scene(3, 100);
+  EXPECT_THROW(ReferenceIndex(cloud, KdTreeSettings{.num_threads = 5000}), InvalidSettingsError);
+  EXPECT_THROW(ReferenceIndex(cloud, KdTreeSettings{.leaf_size = 0}), InvalidSettingsError);
+  EXPECT_NO_THROW(ReferenceIndex(cloud, KdTreeSettings{.num_threads = 0}));
+}
+
+}  // namespace
+}  // namespace sgdicp

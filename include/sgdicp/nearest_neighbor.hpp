@@ -26,6 +26,14 @@ struct KdTreeSettings {
   /// than descending the tree. 24 measured fastest end to end over ../shared/data/pairs
   /// (docs/performance.md: build -20 % against nanoflann's default of 10, align unchanged).
   std::size_t leaf_size = 24;
+  /// Threads that build the tree; 0 = std::thread::hardware_concurrency(), at most 1024. The
+  /// tree, and so every query result, is the same for any count; clouds under 32,768 points are
+  /// built on one thread (a thread start would cost more than it saves).
+  std::size_t num_threads = 1;
+
+  /// Throws InvalidSettingsError for a leaf size of 0 or more than 1024 threads.
+  void validate() const;
+  bool operator==(const KdTreeSettings&) const = default;
 };
 
 /// A KD-tree (nanoflann) over a reference cloud it owns. Non-copyable, cheap to move.

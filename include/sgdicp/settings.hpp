@@ -74,6 +74,10 @@ struct SgdSettings {
   /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report
   /// it in the result (evaluation.hpp); costs about `evaluation_points` k-nearest queries.
   bool check_degeneracy = true;
+  /// Threads of one registration: today the KD-tree build of the convenience overloads on
+  /// clouds, of the CLI and of Python (KdTreeSettings::num_threads); the SGD loop itself runs on
+  /// one. 0 = every core. The result is identical for any count.
+  std::size_t num_threads = 1;
 
   /// The paper's settings: m = 160, d_max = 0.5 scaled, the step rule's step size
   /// (default_learning_rate: the paper's fixed step alpha = 2, Adam 0.01), no refinement, the
@@ -111,6 +115,7 @@ struct BatchSettings {
   std::size_t evaluation_points = 2000;  ///< see SgdSettings
   bool check_degeneracy = true;          ///< see SgdSettings
   bool robust_scaling = true;            ///< see SgdSettings (the scale of scaled distances)
+  std::size_t num_threads = 1;           ///< see SgdSettings
   /// Record a per-iteration trace in the result: the pose after each iteration, every source
   /// point processed per iteration, step size 1, d_max, the pairs kept and, as the cost, their
   /// mean squared distance before the step (scaled units^2).

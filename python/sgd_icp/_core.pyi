@@ -360,6 +360,10 @@ class Settings:
     """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
     bounding box of every point). Keyword robust_scaling=. Default True.
     """
+    num_threads: int
+    """Threads of one registration (today: its KD-tree build), 0 = every core; the result is the
+    same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    """
 
     def __init__(
         self,
@@ -396,6 +400,7 @@ class Settings:
         neighbors: int = ...,
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
+        threads: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
     ) -> None:
@@ -436,6 +441,7 @@ class Settings:
         neighbors: int = ...,
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
+        threads: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
     ) -> Settings:
@@ -479,6 +485,7 @@ class Settings:
         neighbors: int = ...,
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
+        threads: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
     ) -> Settings:
@@ -555,6 +562,10 @@ class BatchSettings:
     """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
     bounding box of every point). Keyword robust_scaling=. Default True.
     """
+    num_threads: int
+    """Threads of one registration (today: its KD-tree build), 0 = every core; the result is the
+    same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    """
     record_trace: bool
     """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
 
@@ -574,6 +585,7 @@ class BatchSettings:
         evaluation_points: int = ...,
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
+        threads: int = ...,
         record_trace: bool = ...,
         cost: _CostName = ...,
     ) -> None:
@@ -616,18 +628,21 @@ class ReferenceIndex:
         self,
         points: _Points,
         *,
-        leaf_size: int = 10,
+        leaf_size: int = 24,
         cost: _CostName = "point-to-point",
         neighborhood: NeighborhoodSettings | None = None,
+        threads: int = 1,
     ) -> None:
         """Builds the tree over an (N, 3) float32/float64 array of points in metres (copied once
         into float32 storage; rows with a NaN or infinite coordinate are dropped and counted in
-        non_finite_dropped). leaf_size: points per KD-tree leaf, default 10. cost: the cost the
+        non_finite_dropped). leaf_size: points per KD-tree leaf, default 24. threads: threads of
+        the build, default 1, 0 = every core (the same tree for any count). cost: the cost the
         index will serve, default 'point-to-point'; 'point-to-plane' estimates the reference
         normals, 'plane-to-plane' the covariances, with `neighborhood` (NeighborhoodSettings,
         default None = NeighborhoodSettings()). The GIL is released during the build. The index
-        never changes afterwards: a registration whose method or cost needs normals or
-        covariances the index lacks raises InvalidInputError instead of adding them.
+        never changes afterwards: the SGD methods estimate the normals or covariances they use
+        during the run; a batch method whose cost needs them raises InvalidInputError when the
+        index lacks them.
         """
 
     def __len__(self) -> int: ...
@@ -851,7 +866,8 @@ def register(
         rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), robust_scaling (True), record_trace (False).
+        check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True), record_trace
+        (False).
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
         batch_size (160, [1, 10000000]), max_distance (Distance.scaled(0.5)),
@@ -865,7 +881,8 @@ def register(
         scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), robust_scaling (True), record_trace (False).
+        check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True), record_trace
+        (False).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in

@@ -107,11 +107,11 @@ struct SharedIndex {
 
 /// Builds the KD-tree and gives the reference what `cost` needs (normals or covariances), with
 /// the GIL released.
-std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, std::size_t leaf_size,
+std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, const KdTreeSettings& tree,
                                          CostType cost, const NeighborhoodSettings& neighborhood) {
   const py::gil_scoped_release release;
   const auto start = std::chrono::steady_clock::now();
-  ReferenceIndex index(std::move(converted.cloud), KdTreeSettings{leaf_size});
+  ReferenceIndex index(std::move(converted.cloud), tree);
   prepare_reference(index, cost, neighborhood);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -237,16 +237,18 @@ enum class Surfaces { in_run, in_index };
 /// `cost` needs when the solver wants them there), then `run(index)` with the GIL released.
 template <typename Run>
 Result register_with(const ConvertedCloud& src, const py::handle& reference, CostType cost,
-                     const NeighborhoodSettings& neighborhood, Surfaces surfaces, Run run) {
+                     const NeighborhoodSettings& neighborhood, std::size_t num_threads,
+                     Surfaces surfaces, Run run) {
   std::shared_ptr<const SharedIndex> index;
   double build_ms = 0.0;
   if (py::isinstance<SharedIndex>(reference)) {
     index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during the run
     if (surfaces == Surfaces::in_index) check_prepared(*index, cost);
   } else {
-    auto built = build_index(
-        cloud_from_array(reference, "reference", NonFinite::drop), KdTreeSettings{}.leaf_size,
-        surfaces == Surfaces::in_index ? cost : CostType::point_to_point, neighborhood);
+    auto built =
+        build_index(cloud_from_array(reference, "reference", NonFinite::drop),
+                    KdTreeSettings{.num_threads = num_threads},
+                    surfaces == Surfaces::in_index ? cost : CostType::point_to_point, neighborhood);
     build_ms = built->build_ms;
     index = std::move(built);
   }
@@ -280,7 +282,7 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
         init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
     const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
     return register_with(
-        src, reference, s.cost, s.neighborhood, Surfaces::in_run,
+        src, reference, s.cost, s.neighborhood, s.num_threads, Surfaces::in_run,
         [&](const ReferenceIndex& index) { return align(src.cloud, index, s, T_init); });
   }
   BatchSettings base = batch_settings_or_default(settings, m);
@@ -290,7 +292,7 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
       init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
   const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
   return register_with(
-      src, reference, b.cost, b.neighborhood, Surfaces::in_index,
+      src, reference, b.cost, b.neighborhood, b.num_threads, Surfaces::in_index,
       [&](const ReferenceIndex& index) { return align_batch(src.cloud, index, b, T_init); });
 }
 
@@ -407,26 +409,32 @@ void bind_reference_index(py::module_& m) {
       m, "ReferenceIndex",
       "A KD-tree over a reference cloud, built once and reused by any number of registrations, "
       "also from several threads at once (queries are read-only).")
-      .def(py::init([](const py::handle& points, const py::handle& leaf_size,
-                       const py::handle& cost, const py::handle& neighborhood) {
-             const CostType c = cost_from_object(cost, "cost");
-             const NeighborhoodSettings n = neighborhood.is_none()
-                                                ? NeighborhoodSettings{}
-                                                : py::cast<NeighborhoodSettings>(neighborhood);
-             auto converted = cloud_from_array(points, "reference", NonFinite::drop);
-             return build_index(std::move(converted), as_count(leaf_size, "leaf_size"), c, n);
-           }),
-           "points"_a, py::kw_only(), "leaf_size"_a = KdTreeSettings{}.leaf_size,
-           "cost"_a = "point-to-point", "neighborhood"_a = py::none(),
-           "Builds the tree over an (N, 3) float32/float64 array of points in metres (copied "
-           "once into float32 storage; rows with a NaN or infinite coordinate are dropped and "
-           "counted in non_finite_dropped). leaf_size: points per KD-tree leaf, default 10. "
-           "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
-           "estimates the reference normals, 'plane-to-plane' the covariances, with "
-           "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings()). The GIL "
-           "is released during the build. The index never changes afterwards: a registration "
-           "whose method or cost needs normals or covariances the index lacks raises "
-           "InvalidInputError instead of adding them.")
+      .def(
+          py::init([](const py::handle& points, const py::handle& leaf_size, const py::handle& cost,
+                      const py::handle& neighborhood, const py::handle& threads) {
+            const CostType c = cost_from_object(cost, "cost");
+            const NeighborhoodSettings n = neighborhood.is_none()
+                                               ? NeighborhoodSettings{}
+                                               : py::cast<NeighborhoodSettings>(neighborhood);
+            auto converted = cloud_from_array(points, "reference", NonFinite::drop);
+            const KdTreeSettings tree{as_count(leaf_size, "leaf_size"),
+                                      as_count(threads, "threads")};
+            return build_index(std::move(converted), tree, c, n);
+          }),
+          "points"_a, py::kw_only(), "leaf_size"_a = KdTreeSettings{}.leaf_size,
+          "cost"_a = "point-to-point", "neighborhood"_a = py::none(),
+          "threads"_a = KdTreeSettings{}.num_threads,
+          "Builds the tree over an (N, 3) float32/float64 array of points in metres (copied "
+          "once into float32 storage; rows with a NaN or infinite coordinate are dropped and "
+          "counted in non_finite_dropped). leaf_size: points per KD-tree leaf, default 24. "
+          "threads: threads of the build, default 1, 0 = every core (the same tree for any "
+          "count). "
+          "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
+          "estimates the reference normals, 'plane-to-plane' the covariances, with "
+          "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings()). The GIL "
+          "is released during the build. The index never changes afterwards: the SGD methods "
+          "estimate the normals or covariances they use during the run; a batch method whose "
+          "cost needs them raises InvalidInputError when the index lacks them.")
       .def("__len__", [](const SharedIndex& s) { return s.index.size(); })
       .def_property_readonly(
           "points",

@@ -255,13 +255,13 @@ std::string repr(const SgdSettings& s) {
              "convergence={}, refinement={}, cost=CostType.{}, kernel=KernelType.{}, "
              "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
              "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
-             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r})")
+             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r})")
       .format(s.batch_size, repr(s.max_correspondence_distance), repr(s.optimizer),
               repr(s.convergence), repr(s.refinement), cost_name(s.cost), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
               s.scaling_origin == ScalingOrigin::center ? "center" : "lower_corner",
               s.max_iterations, s.seed, s.average_iterates, s.evaluation_points, s.record_trace,
-              s.check_degeneracy, s.robust_scaling);
+              s.check_degeneracy, s.robust_scaling, s.num_threads);
 }
 
 std::string repr(const BatchSettings& s) {
@@ -270,11 +270,11 @@ std::string repr(const BatchSettings& s) {
              "kernel=KernelType.{}, kernel_scale={}, trim_ratio={!r}, max_iterations={!r}, "
              "translation_tolerance={!r}, rotation_tolerance={!r}, initial_damping={!r}, "
              "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r}, "
-             "record_trace={!r}, robust_scaling={!r})")
+             "record_trace={!r}, robust_scaling={!r}, num_threads={!r})")
       .format(cost_name(s.cost), repr(s.max_correspondence_distance), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, s.max_iterations, s.translation_tolerance,
               s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
-              s.check_degeneracy, s.record_trace, s.robust_scaling);
+              s.check_degeneracy, s.record_trace, s.robust_scaling, s.num_threads);
 }
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
 template <typename T>
@@ -670,6 +670,9 @@ void bind_sgd_settings(py::module_& m) {
            "Scale from the bulk of each cloud, so that a few far points do not shrink the scene "
            "(False: the paper's bounding box of every point); far points are counted in "
            "RegistrationResult.far_points. Default True.");
+  def_count(settings, "num_threads", &SgdSettings::num_threads,
+            "Threads of one registration (today its KD-tree build, when the reference is given "
+            "as points); 0 = every core. The result is the same for any count. Default 1.");
   def_value_methods(settings);
 }
 
@@ -761,6 +764,8 @@ void bind_batch_settings(py::module_& m) {
   def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling,
            "Scale (of the scaled distances and tolerances) from the bulk of each cloud, not "
            "hostage to a few far points. Default True.");
+  def_count(batch, "num_threads", &BatchSettings::num_threads,
+            "Threads of one registration (its KD-tree build); 0 = every core. Default 1.");
   def_flag(batch, "record_trace", &BatchSettings::record_trace,
            "Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, "
            "pairs, mean squared pair distance). Default False.");
