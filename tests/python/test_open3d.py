@@ -141,8 +141,9 @@ def test_bad_normals_are_clear_errors(clouds):
         sgd_icp.ReferenceIndex(legacy_cloud(reference, normals), normals=normals)
 
 
-def test_open3d_is_not_imported_by_the_package():
-    code = "import sys, sgd_icp; print('open3d' in sys.modules)"
+def test_open3d_and_dask_are_not_imported_by_the_package():
+    code = ("import sys, sgd_icp, sgd_icp.distributed; "
+            "print('open3d' in sys.modules, 'dask' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, cwd=REPO_ROOT / "tests")
-    assert out.stdout.strip() == "False"
+    assert out.stdout.strip() == "False False"
