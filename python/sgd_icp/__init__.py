@@ -101,3 +101,8 @@ for _name in __all__:
         except (AttributeError, TypeError):  # pragma: no cover - immutable type
             pass
 del _name, _obj
+
+from . import _pickle  # noqa: E402 - the settings classes pickle (multiprocessing, Dask)
+
+_pickle.register()
+del _pickle

@@ -67,7 +67,11 @@ def sequential(pairs_file, method, **settings):
     return out
 
 
-@pytest.mark.parametrize("method, settings", [("sgd", {"seed": 7}), ("icp-plane", {})])
+@pytest.mark.parametrize(
+    "method, settings",
+    [("sgd", {"seed": 7}), ("icp-plane", {}), ("sgd", {"settings": sgd_icp.Settings.paper()})],
+    ids=["sgd", "icp-plane", "paper-settings"],
+)
 def test_cluster_matches_sequential_in_order(pairs_file, client, method, settings):
     rows = register_pairs(pairs_file, client, method, **settings)
     expected = sequential(pairs_file, method, **settings)
