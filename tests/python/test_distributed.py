@@ -150,3 +150,22 @@ def test_command_line_writes_rows_in_order(pairs_file, tmp_path):
         if T is not None:
             got = np.array([float(v) for v in row["T_reference_source"].split()]).reshape(4, 4)
             np.testing.assert_array_equal(got, T)
+
+
+def test_command_line_rejects_bad_arguments_before_starting_a_cluster(tmp_path):
+    bad = tmp_path / "pairs.txt"
+    bad.write_text("only_one_field.ply\n")
+    for args, message in [([str(tmp_path / "missing.txt")], "cannot open"),
+                          ([str(bad)], "pairs.txt: line 1"),
+                          ([str(bad), "--workers", "0"], "--workers")]:
+        run = subprocess.run([sys.executable, "-m", "sgd_icp.distributed", *args],
+                             capture_output=True, text=True, timeout=60, cwd=REPO_ROOT / "tests")
+        assert run.returncode == 2 and message in run.stderr, (args, run.stderr)
+
+
+def test_missing_reference_is_reported_in_its_row(pairs_file, client):
+    good = read_jobs(pairs_file)[0]
+    rows = register_pairs([(good.source, str(pairs_file.parent / "missing.ply")),
+                           (good.source, good.reference)], client, seed=7)
+    assert not rows[0].ok and rows[0].error.startswith("IoError") and "missing.ply" in rows[0].error
+    assert rows[1].ok

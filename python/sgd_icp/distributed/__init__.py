@@ -101,7 +101,11 @@ def _settings_key(method: str, settings: dict) -> str:
 def _reference_index(path: str, method: str, settings: dict, capacity: int):
     """(index, build_ms, cached): the index of `path` for these settings, built once per process
     (the newest `capacity` are kept); a changed file is read again."""
-    st = os.stat(path)
+    try:
+        st = os.stat(path)
+    except OSError:
+        sgd_icp.read_points(path)  # raises the library's IoError, which names the file
+        raise
     key = (os.path.abspath(path), st.st_mtime_ns, st.st_size, _settings_key(method, settings))
     with _CACHE_LOCK:
         if key in _INDEXES:
