@@ -426,7 +426,8 @@ void add_bench_command(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
   CLI::App* cmd = app.add_subcommand(
       "bench",
-      "Register every pair of one or more pairs files (format: shared/data/PAIRS.md) and print "
+      "Register every pair of one or more pairs files (format: PAIRS.md of the data folder, "
+      "../shared/data/PAIRS.md beside the repository) and print "
       "per-pair errors and times and a summary. Time = preparation (kd-tree build, normals/"
       "covariances, downsampling) + registration; file I/O is excluded.");
   cmd->add_option("PAIRS_FILE", o->pairs_files, "Pairs file(s)")->required();

@@ -1,17 +1,19 @@
 // sgdicp: command-line registration of point clouds with SGD-ICP.
 #include <iostream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
 #include "sgdicp/error.hpp"
+#include "sgdicp/version.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{
       "sgdicp: register 3D point clouds with SGD-ICP (ICP solved by stochastic gradient descent "
       "on mini-batches; Maken, Ramos, Ott, ICRA 2019)."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "sgdicp 0.1.0");
+  app.set_version_flag("--version", std::string("sgdicp ") + sgdicp::kVersion);
   sgdicp::cli::add_register_command(app);
   sgdicp::cli::add_bench_command(app);
   try {

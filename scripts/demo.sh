@@ -5,7 +5,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
-scripts/build.sh
+scripts/build.sh sgdicp_cli  # the CLI only: the demo needs no test binary
 build_dir=${BUILD_DIR:-build}
 "$build_dir/sgdicp" register data/demo/car_cloud401.csv data/demo/car_cloud400.csv \
   --ground-truth data/demo/T_gt.txt --picture demo.png "$@"

@@ -33,6 +33,7 @@ pip_install() {
 pip_install pytest numpy
 # Build requirements (scikit-build-core, pybind11) come from pyproject.toml; the module is built
 # in the build folder, with warnings as errors.
+echo "test: building and installing the Python package (compiles the C++ core again: a few minutes the first time)"
 pip_install --config-settings=build-dir="$build_dir/python" \
   --config-settings=cmake.define.SGDICP_WARNINGS_AS_ERRORS=ON .
 

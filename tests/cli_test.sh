@@ -153,6 +153,13 @@ else
   fail "sgdicp --help (exit $rc)"
 fi
 expect_ok "sgdicp --version" --version
+# One version: the CLI's is the CMake project's (CMakeLists.txt), as the Python package's is.
+project_version=$(sed -n 's/^project(sgdicp VERSION \([0-9.]*\).*/\1/p' "$(dirname "$0")/../CMakeLists.txt")
+if [ -n "$project_version" ] && [ "$(cat "$tmp/out")" = "sgdicp $project_version" ]; then
+  pass "sgdicp --version is the CMake project version $project_version"
+else
+  fail "sgdicp --version printed '$(cat "$tmp/out")', CMakeLists.txt has '$project_version'"
+fi
 
 run register --help
 if [ "$rc" -eq 0 ]; then

@@ -7,6 +7,10 @@
 >>> result.T_reference_source                          # (4, 4) float64: p_ref = R @ p_src + t
 >>> result = sgd_icp.register(source, reference, method="gicp")   # batch GICP
 
+Open3D clouds (open3d.geometry.PointCloud, open3d.t.geometry.PointCloud) are accepted wherever
+arrays are, without importing open3d here; sgd_icp.distributed registers many pairs on a Dask
+cluster (docs/distributed.md).
+
 See docs/python.md for the methods, the settings, the keyword overrides, preprocessing and the
 errors.
 """
@@ -37,8 +41,10 @@ from ._core import (
     estimate_covariances,
     estimate_normals,
     random_downsample,
+    read_pairs,
     read_point_cloud,
     read_points,
+    read_transform,
     register,
     rotation_error_euler_sum,
     rotation_error_geodesic,
@@ -73,8 +79,10 @@ __all__ = [
     "estimate_covariances",
     "estimate_normals",
     "random_downsample",
+    "read_pairs",
     "read_point_cloud",
     "read_points",
+    "read_transform",
     "register",
     "rotation_error_euler_sum",
     "rotation_error_geodesic",
@@ -93,3 +101,8 @@ for _name in __all__:
         except (AttributeError, TypeError):  # pragma: no cover - immutable type
             pass
 del _name, _obj
+
+from . import _pickle  # noqa: E402 - the settings classes pickle (multiprocessing, Dask)
+
+_pickle.register()
+del _pickle

@@ -15,8 +15,9 @@ import numpy.typing as npt
 __version__: str
 
 _Path = Union[str, os.PathLike[str]]
-_Points = npt.ArrayLike
-"""An (N, 3) float32 or float64 array of points in metres, any memory layout."""
+_Points = Union[npt.ArrayLike, Any]
+"""An (N, 3) float32 or float64 array of points in metres, any memory layout, or an Open3D
+PointCloud (open3d.geometry.PointCloud or open3d.t.geometry.PointCloud)."""
 _Transform = npt.ArrayLike
 """A (4, 4) rigid transform, metres."""
 _OptimizerName = Union["OptimizerType", str]
@@ -628,6 +629,7 @@ class ReferenceIndex:
         self,
         points: _Points,
         *,
+        normals: npt.ArrayLike | None = None,
         leaf_size: int = 24,
         cost: _CostName = "point-to-point",
         neighborhood: NeighborhoodSettings | None = None,
@@ -635,14 +637,30 @@ class ReferenceIndex:
     ) -> None:
         """Builds the tree over an (N, 3) float32/float64 array of points in metres (copied once
         into float32 storage; rows with a NaN or infinite coordinate are dropped and counted in
-        non_finite_dropped). leaf_size: points per KD-tree leaf, default 24. threads: threads of
-        the build, default 1, 0 = every core (the same tree for any count). cost: the cost the
-        index will serve, default 'point-to-point'; 'point-to-plane' estimates the reference
-        normals, 'plane-to-plane' the covariances, with `neighborhood` (NeighborhoodSettings,
-        default None = NeighborhoodSettings()). The GIL is released during the build. The index
-        never changes afterwards: the SGD methods estimate the normals or covariances they use
-        during the run; a batch method whose cost needs them raises InvalidInputError when the
-        index lacks them.
+        non_finite_dropped), or over an Open3D PointCloud (legacy or tensor; its normals too when
+        it has them). normals: (N, 3) unit normals, one per row of points, default None; the
+        point-to-plane cost uses them instead of estimating its own. leaf_size: points per
+        KD-tree leaf, default 10. cost: the cost the index will serve, default 'point-to-point';
+        'point-to-plane' estimates the reference normals (unless given), 'plane-to-plane' the
+        covariances, with `neighborhood` (NeighborhoodSettings, default None =
+        NeighborhoodSettings()). The GIL is released during the build. The index never changes
+        afterwards: a registration whose method or cost needs normals or covariances the index
+        lacks raises InvalidInputError instead of adding them.
+        """
+
+    @staticmethod
+    def for_registration(
+        points: _Points,
+        *,
+        method: _MethodName = "sgd",
+        settings: Settings | BatchSettings | None = None,
+        **overrides: Any,
+    ) -> ReferenceIndex:
+        """The index that register(source, points, method=method, settings=settings, **overrides)
+        builds for its reference (the cost's normals or covariances with the settings'
+        neighbourhood), for reuse over many sources with the same arguments: the results are the
+        same as passing points each time. points: an array or an Open3D PointCloud, as for
+        register(). Raises the errors of register() for the method, settings and keywords.
         """
 
     def __len__(self) -> int: ...
@@ -1063,6 +1081,24 @@ def read_points(
     """Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points (float64
     for georeferenced coordinates, docs/io.md); see read_point_cloud for the formats, the counts
     and the errors.
+    """
+
+
+def read_transform(path: _Path) -> npt.NDArray[np.float64]:
+    """Reads a transform file as the CLI's --init does (12 numbers, a 3x4 [R | t], or 16, a 4x4,
+    row-major; '#' comment lines; projected onto the nearest rotation) into a (4, 4) float64
+    array. Raises IoError (OSError) or FormatError (ValueError).
+    """
+
+
+def read_pairs(
+    path: _Path,
+) -> list[tuple[str, str, npt.NDArray[np.float64], int]]:
+    """Reads a pairs file (one SOURCE REFERENCE and ground-truth T_reference_source per line, the
+    format of `sgdicp bench`: shared/data/PAIRS.md) into a list of (source, reference, T_gt,
+    line) tuples: the paths resolved against the file's folder, T_gt a (4, 4) float64 array, line
+    the line number in the file. Raises IoError (OSError) or FormatError (ValueError) naming the
+    file and line.
     """
 
 

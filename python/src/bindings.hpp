@@ -31,11 +31,16 @@ struct ConvertedCloud {
 
 /// Copies an (N, 3) float32/float64 array of any memory layout (C, Fortran, strided, negative
 /// strides, unaligned) into a cloud. This copy is the one the library's float storage needs;
-/// nothing else is copied. Non-arrays go through numpy.asarray first. Throws InvalidInputError
-/// (a ValueError in Python) naming `what` for a wrong dimension, shape or dtype, for zero rows
-/// unless `allow_empty`, and when every row was dropped as non-finite.
+/// nothing else is copied. An Open3D cloud (open3d.geometry.PointCloud or
+/// open3d.t.geometry.PointCloud) gives its points and, when it has them, its normals, without
+/// open3d being imported here. Other non-arrays go through numpy.asarray first. `normals`, an
+/// (N, 3) array or None, gives the cloud unit normals row for row (dropped with their points).
+/// Throws InvalidInputError (a ValueError in Python) naming `what` for a wrong dimension, shape
+/// or dtype, for zero rows unless `allow_empty`, when every row was dropped as non-finite, and
+/// for normals of another count or with a non-finite value.
 [[nodiscard]] ConvertedCloud cloud_from_array(const py::handle& points, std::string_view what,
-                                              NonFinite non_finite, bool allow_empty = false);
+                                              NonFinite non_finite, bool allow_empty = false,
+                                              const py::handle& normals = py::none());
 
 /// An (N, 3) float32 array that takes over the cloud's storage (no copy); for a georeferenced
 /// cloud (origin_m not zero) a float64 array of origin + point, which float32 cannot hold.

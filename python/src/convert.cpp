@@ -4,8 +4,10 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "bindings.hpp"
@@ -57,8 +59,10 @@ Eigen::Vector3d origin_of_rows(const py::array& a) {
   return Eigen::Vector3d::Zero();
 }
 
+// Copies the rows into out.cloud.points; `kept` (when given) gets one flag per row.
 template <typename T>
-void copy_rows(const py::array& a, NonFinite non_finite, ConvertedCloud& out) {
+void copy_rows(const py::array& a, NonFinite non_finite, ConvertedCloud& out,
+               std::vector<bool>* kept) {
   const py::ssize_t rows = a.shape(0);
   out.cloud.points.reserve(static_cast<std::size_t>(rows));
   if constexpr (std::is_same_v<T, double>) out.cloud.origin_m = origin_of_rows(a);
@@ -67,11 +71,30 @@ void copy_rows(const py::array& a, NonFinite non_finite, ConvertedCloud& out) {
     const Eigen::Matrix<T, 3, 1> row = row_at<T>(a, i);
     Eigen::Vector3f p;
     for (int j = 0; j < 3; ++j) p[j] = to_float(static_cast<T>(row[j] - origin[j]));
-    if (non_finite == NonFinite::drop && !p.allFinite()) {
+    const bool keep = non_finite == NonFinite::keep || p.allFinite();
+    if (kept) kept->push_back(keep);
+    if (!keep) {
       ++out.non_finite_dropped;
       continue;
     }
     out.cloud.points.push_back(p);
+  }
+}
+
+// The normals of the kept rows (the points' non-finite rows are dropped with them).
+template <typename T>
+void copy_normals(const py::array& a, const std::vector<bool>& kept, const std::string& name,
+                  ConvertedCloud& out) {
+  out.cloud.normals.reserve(out.cloud.points.size());
+  for (py::ssize_t i = 0; i < a.shape(0); ++i) {
+    if (!kept[static_cast<std::size_t>(i)]) continue;
+    const Eigen::Matrix<T, 3, 1> row = row_at<T>(a, i);
+    Eigen::Vector3f n;
+    for (int j = 0; j < 3; ++j) n[j] = to_float(row[j]);
+    if (!n.allFinite()) {
+      throw InvalidInputError(name + " has a non-finite normal at row " + std::to_string(i));
+    }
+    out.cloud.normals.push_back(n);
   }
 }
 
@@ -80,17 +103,10 @@ py::array as_ndarray(const py::handle& value) {
   return py::module_::import("numpy").attr("asarray")(value);
 }
 
-}  // namespace
-
-ConvertedCloud cloud_from_array(const py::handle& points, std::string_view what,
-                                NonFinite non_finite, bool allow_empty) {
-  const std::string name(what);
-  if (py::isinstance<py::str>(points) || py::hasattr(points, "__fspath__")) {
-    throw InvalidInputError(name + " must be an (N, 3) array of points, got a path " +
-                            std::string(py::str(points)) +
-                            " (read files with sgd_icp.read_points(path))");
-  }
-  py::array a = as_ndarray(points);
+// An (N, 3) float32/float64 array with native byte order; InvalidInputError naming `name`
+// for another dtype or shape.
+py::array checked_rows(const py::handle& value, const std::string& name) {
+  py::array a = as_ndarray(value);
   const bool is_float = a.dtype().num() == py::dtype::of<float>().num();
   const bool is_double = a.dtype().num() == py::dtype::of<double>().num();
   if (!(is_float || is_double)) {
@@ -106,14 +122,75 @@ ConvertedCloud cloud_from_array(const py::handle& points, std::string_view what,
                             " must be an (N, 3) array of points (one x y z row per point), " +
                             "got shape " + shape_string(a));
   }
+  return a;
+}
+
+bool is_double_array(const py::array& a) {
+  return a.dtype().num() == py::dtype::of<double>().num();
+}
+
+// The points and normals (None when absent) of an Open3D cloud, read through its own attributes
+// so that open3d is never imported here: open3d.geometry.PointCloud (Vector3dVector, float64)
+// and open3d.t.geometry.PointCloud (tensors on any device, copied to the CPU). nullopt for any
+// other object.
+std::optional<std::pair<py::object, py::object>> open3d_arrays(const py::handle& value) {
+  const py::handle type = py::type::handle_of(value);
+  const std::string module = py::str(type.attr("__module__"));
+  const std::string class_name = py::str(type.attr("__name__"));
+  if (module.rfind("open3d", 0) != 0 || class_name != "PointCloud") return std::nullopt;
+  if (py::hasattr(value, "point")) {  // tensor cloud: a TensorMap of named attributes
+    const py::object map = value.attr("point");
+    const auto array = [&](const char* key) { return map.attr(key).attr("cpu")().attr("numpy")(); };
+    const bool has_normals = map.attr("__contains__")("normals").cast<bool>();
+    return std::pair{array("positions"), has_normals ? array("normals") : py::object(py::none())};
+  }
+  const bool has_normals = value.attr("has_normals")().cast<bool>();
+  return std::pair{as_ndarray(value.attr("points")),
+                   has_normals ? py::object(as_ndarray(value.attr("normals"))) : py::none()};
+}
+
+}  // namespace
+
+ConvertedCloud cloud_from_array(const py::handle& points, std::string_view what,
+                                NonFinite non_finite, bool allow_empty, const py::handle& normals) {
+  const std::string name(what);
+  if (py::isinstance<py::str>(points) || py::hasattr(points, "__fspath__")) {
+    throw InvalidInputError(name + " must be an (N, 3) array of points, got a path " +
+                            std::string(py::str(points)) +
+                            " (read files with sgd_icp.read_points(path))");
+  }
+  py::object rows = py::reinterpret_borrow<py::object>(points);
+  py::object normal_rows = py::reinterpret_borrow<py::object>(normals);
+  if (auto o3d = open3d_arrays(points)) {
+    if (!normals.is_none() && !o3d->second.is_none()) {
+      throw InvalidInputError(name + " is an Open3D cloud with normals: drop normals=");
+    }
+    rows = o3d->first;
+    if (normals.is_none()) normal_rows = o3d->second;
+  }
+  const py::array a = checked_rows(rows, name);
   if (a.shape(0) == 0 && !allow_empty) {
     throw InvalidInputError(name + " has no points (shape " + shape_string(a) + ")");
   }
+  std::optional<py::array> n;
+  if (!normal_rows.is_none()) {
+    n = checked_rows(normal_rows, name + " normals");
+    if (n->shape(0) != a.shape(0)) {
+      throw InvalidInputError(name + " has " + std::to_string(a.shape(0)) + " points but " +
+                              std::to_string(n->shape(0)) + " normals");
+    }
+  }
   ConvertedCloud out;
-  if (is_float) {
-    copy_rows<float>(a, non_finite, out);
+  std::vector<bool> kept;
+  if (is_double_array(a)) {
+    copy_rows<double>(a, non_finite, out, n ? &kept : nullptr);
   } else {
-    copy_rows<double>(a, non_finite, out);
+    copy_rows<float>(a, non_finite, out, n ? &kept : nullptr);
+  }
+  if (n && is_double_array(*n)) {
+    copy_normals<double>(*n, kept, name, out);
+  } else if (n) {
+    copy_normals<float>(*n, kept, name, out);
   }
   if (out.cloud.empty() && !allow_empty) {
     throw InvalidInputError(name + " has no finite points: all " +

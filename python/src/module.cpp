@@ -20,8 +20,10 @@
 #include "sgdicp/methods.hpp"
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/pairs.hpp"
 #include "sgdicp/preprocessing.hpp"
 #include "sgdicp/registration.hpp"
+#include "sgdicp/transform_io.hpp"
 
 #ifndef SGDICP_VERSION
 #define SGDICP_VERSION "0.0.0"
@@ -296,6 +298,28 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
       [&](const ReferenceIndex& index) { return align_batch(src.cloud, index, b, T_init); });
 }
 
+/// What the reference index that register_clouds builds for an array reference holds, for the
+/// same method, settings and overrides: the SGD methods estimate their cost's normals or
+/// covariances during the run, the batch methods need them in the index.
+struct ReferenceNeeds {
+  CostType cost;
+  NeighborhoodSettings neighborhood;
+  std::size_t num_threads;
+};
+ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
+                               const py::kwargs& overrides) {
+  if (m.solver == Solver::sgd) {
+    SgdSettings base = settings_or_default(settings, m);
+    if (m.cost) base.cost = *m.cost;
+    const SgdSettings s = with_overrides(base, overrides);
+    return {CostType::point_to_point, s.neighborhood, s.num_threads};
+  }
+  BatchSettings base = batch_settings_or_default(settings, m);
+  base.cost = *m.cost;
+  const BatchSettings b = with_batch_overrides(base, overrides, std::string(m.name));
+  return {b.cost, b.neighborhood, b.num_threads};
+}
+
 // ---- file I/O
 
 FileFormat format_from_object(const py::handle& value) {
@@ -409,32 +433,52 @@ void bind_reference_index(py::module_& m) {
       m, "ReferenceIndex",
       "A KD-tree over a reference cloud, built once and reused by any number of registrations, "
       "also from several threads at once (queries are read-only).")
-      .def(
-          py::init([](const py::handle& points, const py::handle& leaf_size, const py::handle& cost,
-                      const py::handle& neighborhood, const py::handle& threads) {
-            const CostType c = cost_from_object(cost, "cost");
-            const NeighborhoodSettings n = neighborhood.is_none()
-                                               ? NeighborhoodSettings{}
-                                               : py::cast<NeighborhoodSettings>(neighborhood);
-            auto converted = cloud_from_array(points, "reference", NonFinite::drop);
-            const KdTreeSettings tree{as_count(leaf_size, "leaf_size"),
-                                      as_count(threads, "threads")};
-            return build_index(std::move(converted), tree, c, n);
-          }),
-          "points"_a, py::kw_only(), "leaf_size"_a = KdTreeSettings{}.leaf_size,
-          "cost"_a = "point-to-point", "neighborhood"_a = py::none(),
-          "threads"_a = KdTreeSettings{}.num_threads,
-          "Builds the tree over an (N, 3) float32/float64 array of points in metres (copied "
-          "once into float32 storage; rows with a NaN or infinite coordinate are dropped and "
-          "counted in non_finite_dropped). leaf_size: points per KD-tree leaf, default 24. "
-          "threads: threads of the build, default 1, 0 = every core (the same tree for any "
-          "count). "
-          "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
-          "estimates the reference normals, 'plane-to-plane' the covariances, with "
-          "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings()). The GIL "
-          "is released during the build. The index never changes afterwards: the SGD methods "
-          "estimate the normals or covariances they use during the run; a batch method whose "
-          "cost needs them raises InvalidInputError when the index lacks them.")
+      .def(py::init([](const py::handle& points, const py::handle& normals,
+                       const py::handle& leaf_size, const py::handle& cost,
+                       const py::handle& neighborhood, const py::handle& threads) {
+             const CostType c = cost_from_object(cost, "cost");
+             const NeighborhoodSettings n = neighborhood.is_none()
+                                                ? NeighborhoodSettings{}
+                                                : py::cast<NeighborhoodSettings>(neighborhood);
+             auto converted =
+                 cloud_from_array(points, "reference", NonFinite::drop, false, normals);
+             const KdTreeSettings tree{as_count(leaf_size, "leaf_size"),
+                                       as_count(threads, "threads")};
+             return build_index(std::move(converted), tree, c, n);
+           }),
+           "points"_a, py::kw_only(), "normals"_a = py::none(),
+           "leaf_size"_a = KdTreeSettings{}.leaf_size, "cost"_a = "point-to-point",
+           "neighborhood"_a = py::none(), "threads"_a = KdTreeSettings{}.num_threads,
+           "Builds the tree over an (N, 3) float32/float64 array of points in metres (copied "
+           "once into float32 storage; rows with a NaN or infinite coordinate are dropped and "
+           "counted in non_finite_dropped), or over an Open3D PointCloud (legacy or tensor; its "
+           "normals too when it has them). normals: (N, 3) unit normals, one per row of points, "
+           "default None; the point-to-plane cost uses them instead of estimating its own. "
+           "leaf_size: points per KD-tree leaf, default 24. threads: threads of the build, "
+           "default 1, 0 = every core (the same tree for any count). "
+           "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
+           "estimates the reference normals (unless given), 'plane-to-plane' the covariances, with "
+           "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings()). The GIL "
+           "is released during the build. The index never changes afterwards: the SGD methods "
+           "estimate the normals or covariances they use during the run; a batch method whose "
+           "cost needs them raises InvalidInputError when the index lacks them.")
+      .def_static(
+          "for_registration",
+          [](const py::handle& points, const py::handle& method, const py::handle& settings,
+             const py::kwargs& overrides) {
+            const ReferenceNeeds needs =
+                reference_needs(method_from_object(method), settings, overrides);
+            return build_index(cloud_from_array(points, "reference", NonFinite::drop),
+                               KdTreeSettings{.num_threads = needs.num_threads}, needs.cost,
+                               needs.neighborhood);
+          },
+          "points"_a, py::kw_only(), "method"_a = "sgd", "settings"_a = py::none(),
+          "The index that register(source, points, method=method, settings=settings, "
+          "**overrides) builds for its reference (for a batch method the cost's normals or "
+          "covariances with the settings' neighbourhood), for reuse over many sources with the "
+          "same arguments: the results are the same as passing points each time. points: an "
+          "array or an Open3D PointCloud, as for register(). Raises the errors of register() for "
+          "the method, settings and keywords.")
       .def("__len__", [](const SharedIndex& s) { return s.index.size(); })
       .def_property_readonly(
           "points",
@@ -575,6 +619,30 @@ void bind_register_and_io(py::module_& m) {
       "Reads a point-cloud file into an (N, 3) float32 array (metres) of its finite points "
       "(float64 for georeferenced coordinates, docs/io.md); see read_point_cloud for the "
       "formats, the counts and the errors.");
+  m.def(
+      "read_transform",
+      [](const std::filesystem::path& path) { return array_from_matrix(read_transform(path)); },
+      "path"_a,
+      "Reads a transform file as the CLI's --init does (12 numbers, a 3x4 [R | t], or 16, a "
+      "4x4, row-major; '#' comment lines; projected onto the nearest rotation) into a (4, 4) "
+      "float64 array. Raises IoError (OSError) or FormatError "
+      "(ValueError).");
+  m.def(
+      "read_pairs",
+      [](const std::filesystem::path& path) {
+        py::list pairs;
+        for (const RegistrationPair& p : read_pairs_file(path)) {
+          pairs.append(py::make_tuple(p.source.string(), p.reference.string(),
+                                      array_from_matrix(p.T_reference_source_gt), p.line));
+        }
+        return pairs;
+      },
+      "path"_a,
+      "Reads a pairs file (one SOURCE REFERENCE and ground-truth T_reference_source per line, "
+      "the format of `sgdicp bench`: shared/data/PAIRS.md) into a list of (source, reference, "
+      "T_gt, line) tuples: the paths resolved against the file's folder, T_gt a (4, 4) float64 "
+      "array, line the line number in the file. Raises IoError (OSError) or FormatError "
+      "(ValueError) naming the file and line.");
   m.def(
       "write_points",
       [](const std::filesystem::path& path, const py::handle& points, const py::handle& format,

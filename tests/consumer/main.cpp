@@ -6,6 +6,7 @@
 
 #include <sgdicp/pairs.hpp>
 #include <sgdicp/sgdicp.hpp>
+#include <sgdicp/version.hpp>
 
 // sgdicp::tools links too: a pairs file written here reads back.
 bool pairs_file_reads_back() {
@@ -29,6 +30,7 @@ int main() {
   const sgdicp::RegistrationResult r = sgdicp::align(source, reference);
   const double error =
       (r.T_reference_source.topRightCorner<3, 1>() - Eigen::Vector3d(0.012, -0.009, 0.006)).norm();
-  std::printf("converged=%d translation error=%.3g m\n", r.converged ? 1 : 0, error);
+  std::printf("sgdicp %s: converged=%d translation error=%.3g m\n", sgdicp::kVersion,
+              r.converged ? 1 : 0, error);
   return r.converged && error < 0.005 && pairs_file_reads_back() ? 0 : 1;
 }

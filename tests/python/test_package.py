@@ -161,3 +161,18 @@ def test_documented_defaults_are_the_real_ones():
                     assert actual == expected, f"{class_name}.{member}: documented {literal}"
                     checked += 1
     assert checked >= 70
+
+
+def test_one_version_for_cmake_cli_and_package():
+    import re
+    import subprocess
+
+    from conftest import REPO_ROOT, find_cli
+
+    cmake = (REPO_ROOT / "CMakeLists.txt").read_text()
+    project_version = re.search(r"project\(sgdicp\s+VERSION\s+([0-9.]+)", cmake).group(1)
+    assert sgd_icp.__version__ == project_version
+    cli = find_cli()
+    if cli is not None:
+        out = subprocess.run([str(cli), "--version"], capture_output=True, text=True, check=True)
+        assert out.stdout.strip() == f"sgdicp {project_version}"

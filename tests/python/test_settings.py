@@ -236,3 +236,22 @@ def test_settings_compare_field_by_field():
     s = Settings()
     s.neighborhood.viewpoint = (0.0, 0.0, 1.0)
     assert s != Settings()
+
+
+def test_settings_pickle_to_equal_copies():
+    import sgd_icp
+
+    cases = [
+        sgd_icp.Settings(),
+        sgd_icp.Settings.paper(),
+        sgd_icp.Settings(seed=3, neighbors=7, max_distance=1.0, max_distance_unit="m"),
+        sgd_icp.BatchSettings.gicp(),
+        sgd_icp.BatchSettings(trim=0.8),
+        sgd_icp.Distance(0.3, "m"),
+    ]
+    for settings in cases:
+        copy = pickle.loads(pickle.dumps(settings))
+        assert type(copy) is type(settings) and copy == settings
+    changed = pickle.loads(pickle.dumps(sgd_icp.Settings(seed=3)))
+    changed.seed = 4
+    assert changed != sgd_icp.Settings(seed=3)
