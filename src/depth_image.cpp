@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "io_files.hpp"
+#include "io/files.hpp"
 #include "parse_number.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/io.hpp"

@@ -1,5 +1,6 @@
 #pragma once
-// File access shared by the readers (internal): one bounded way to read a whole file.
+// File access shared by the readers (internal): one bounded way to read a whole file
+// (src/io/files.cpp), used by the point-cloud readers and the depth-image reader.
 #include <cstdint>
 #include <filesystem>
 #include <string>
