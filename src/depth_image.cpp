@@ -141,11 +141,13 @@ struct StbFree {
   void operator()(stbi_us* p) const noexcept { stbi_image_free(p); }
 };
 
-// The PNG without its empty IDAT chunks (legal, and they add no data), or `data` itself when it
-// has none: stb_image 2.27 copies an empty IDAT with memcpy from a null pointer (undefined
-// behaviour, found by fuzz_depth_png). Stops at the first chunk that runs past the end of the
-// file and leaves the rest to the decoder, which refuses it.
-std::string_view without_empty_idat(std::string_view data, std::string& storage) {
+// The PNG's chunks checked against the file before stb_image sees them, which 2.27 does not do:
+// a chunk whose length runs past the end of the file is refused (stb_image would allocate the
+// claimed length first, up to 4 GiB, for a file of a few bytes), and empty IDAT chunks (legal,
+// no data) are dropped, as stb_image copies one with memcpy from a null pointer (undefined
+// behaviour). Both found by fuzz_depth_png. Returns `data` itself unless a chunk was dropped.
+std::string_view checked_png_chunks(std::string_view data, const std::string& name,
+                                    std::string& storage) {
   constexpr std::size_t kSignature = 8, kFraming = 12;  // length, type, CRC
   const auto length_at = [&](std::size_t pos) {
     std::uint32_t v = 0;
@@ -153,17 +155,24 @@ std::string_view without_empty_idat(std::string_view data, std::string& storage)
     return std::size_t{v};
   };
   std::size_t pos = kSignature;
-  bool any = false;
+  bool dropped = false;
   std::string out(data.substr(0, std::min(kSignature, data.size())));
-  while (pos + kFraming <= data.size()) {
+  while (pos + 8 <= data.size()) {  // a length and a type
     const std::size_t length = length_at(pos);
-    if (length > data.size() - pos - kFraming) break;
-    const bool empty_idat = length == 0 && data.substr(pos + 4, 4) == "IDAT";
+    const std::string_view type = data.substr(pos + 4, 4);
+    if (pos + kFraming > data.size() || length > data.size() - pos - kFraming) {
+      throw FormatError(name + ": byte " + std::to_string(pos) + ": truncated: the " +
+                        std::string(type.substr(0, 4)) + " chunk claims " + std::to_string(length) +
+                        " bytes, the file has " + std::to_string(data.size() - pos) +
+                        " from there");
+    }
+    const bool empty_idat = length == 0 && type == "IDAT";
     if (!empty_idat) out.append(data.substr(pos, kFraming + length));
-    any = any || empty_idat;
+    dropped = dropped || empty_idat;
     pos += kFraming + length;
+    if (type == "IEND") break;
   }
-  if (!any) return data;
+  if (!dropped) return data;
   out.append(data.substr(std::min(pos, data.size())));
   storage = std::move(out);
   return storage;
@@ -175,7 +184,7 @@ PointCloud decode_png(std::string_view file, const std::string& name, const Pinh
   settings.validate();
   if (file.empty()) throw FormatError(name + ": empty file");
   std::string storage;
-  const std::string_view data = without_empty_idat(file, storage);
+  const std::string_view data = checked_png_chunks(file, name, storage);
   if (data.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
     throw FormatError(name + ": larger than the PNG decoder reads (2 GiB)");
   }

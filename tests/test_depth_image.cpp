@@ -294,6 +294,19 @@ TEST(DepthPng, EmptyIdatChunksAreSkipped) {
   EXPECT_EQ(read(plain).size(), 3U);
 }
 
+TEST(DepthPng, ChunkLongerThanTheFileIsTruncated) {
+  // An IDAT chunk claiming 2 GiB in a file of ~80 bytes: refused before anything is allocated.
+  const std::vector<std::uint16_t> depth{1000, 0, 2000, 3000};
+  std::string bytes = png(2, 2, depth);
+  bytes[33] = static_cast<char>(0x80);  // the IDAT length, first byte (at 33: after IHDR)
+  const auto* data = reinterpret_cast<const std::byte*>(bytes.data());
+  const std::string what = error_of([&] {
+    (void)read_depth_image_from_memory({data, bytes.size()}, kK, {}, nullptr, "long");
+  });
+  EXPECT_NE(what.find("long: byte 33: truncated: the IDAT chunk claims 2147483"), std::string::npos)
+      << what;
+}
+
 TEST(DepthPng, HostileFilesAreFormatErrorsNamingTheFile) {
   const test::TempDir dir;
   const std::vector<std::uint16_t> depth(4 * 3, 1000);
@@ -311,8 +324,11 @@ TEST(DepthPng, HostileFilesAreFormatErrorsNamingTheFile) {
   EXPECT_NE(error("eight.png", png(4, 3, depth, 8)).find("8-bit"), std::string::npos);
   EXPECT_NE(error("rgb.png", png(4, 3, depth, 16, 3)).find("3 channels"), std::string::npos);
   const std::string good = png(4, 3, depth);
-  EXPECT_NE(error("truncated.png", good.substr(0, good.size() - 30)).find("decode"),
+  EXPECT_NE(error("truncated.png", good.substr(0, good.size() - 30)).find("truncated: the IDAT"),
             std::string::npos);
+  std::string corrupt = good;
+  corrupt[41] = static_cast<char>(0xFF);  // inside the IDAT data: the zlib stream breaks
+  EXPECT_NE(error("corrupt.png", corrupt).find("cannot decode"), std::string::npos);
   EXPECT_NE(error("empty.png", "").find("empty"), std::string::npos);
   EXPECT_NE(error("text.png", "585 0 320\n").find("not a readable PNG"), std::string::npos);
   EXPECT_THROW((void)read_depth_image(dir.path() / "missing.png", kK), IoError);
