@@ -1,0 +1,166 @@
+// Helpers every reader and writer shares (io_internal.hpp).
+#include "io_internal.hpp"
+
+namespace sgdicp::io_detail {
+
+// ---------------------------------------------------------------------------------------------
+// Errors
+
+[[noreturn]] void fail_line(const std::string& name, std::size_t line, const std::string& what) {
+  throw FormatError(name + ": line " + std::to_string(line) + ": " + what);
+}
+
+[[noreturn]] void fail_byte(const std::string& name, std::size_t byte, const std::string& what) {
+  throw FormatError(name + ": byte " + std::to_string(byte) + ": " + what);
+}
+
+// A token from the file, quoted and shortened so a binary blob cannot flood the message.
+std::string shown(std::string_view token) {
+  constexpr std::size_t kMaxShown = 40;
+  std::string out = "'";
+  for (const char c : token.substr(0, kMaxShown)) {
+    out += std::isprint(static_cast<unsigned char>(c)) != 0 ? c : '?';
+  }
+  if (token.size() > kMaxShown) out += "...";
+  return out + "'";
+}
+
+std::string system_message(int error_number) {
+  return std::generic_category().message(error_number != 0 ? error_number : EIO);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Arithmetic and byte helpers
+
+std::optional<std::uint64_t> checked_mul(std::uint64_t a, std::uint64_t b) {
+  if (a != 0 && b > std::numeric_limits<std::uint64_t>::max() / a) return std::nullopt;
+  return a * b;
+}
+
+std::optional<std::uint64_t> checked_add(std::uint64_t a, std::uint64_t b) {
+  if (b > std::numeric_limits<std::uint64_t>::max() - a) return std::nullopt;
+  return a + b;
+}
+
+std::string byte_count_text(std::optional<std::uint64_t> bytes) {
+  return bytes ? std::to_string(*bytes)
+               : "more than " + std::to_string(std::numeric_limits<std::uint64_t>::max());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text helpers
+
+bool iequals(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+std::string lowercase(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::vector<std::string_view> split_whitespace(std::string_view line) {
+  std::vector<std::string_view> tokens;
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_space(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !is_space(line[i])) ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+  return tokens;
+}
+
+bool parse_uint(std::string_view token, std::uint64_t& out) {
+  const char* const last = token.data() + token.size();
+  const auto [end, error] = std::from_chars(token.data(), last, out);
+  return !token.empty() && error == std::errc() && end == last;
+}
+
+// Whether a token is an integer (one optional sign) that fits `bytes` bytes, signed or not:
+// the text of an integer field, where "banana", "1.5" or "300" for a uchar are errors.
+bool is_integer_token(std::string_view token, std::size_t bytes, bool is_signed) {
+  if (token.starts_with('+')) token.remove_prefix(1);
+  if (token.empty() || token.front() == '+') return false;
+  const char* const last = token.data() + token.size();
+  const unsigned bits = static_cast<unsigned>(bytes * 8);
+  if (is_signed) {
+    std::int64_t v = 0;
+    const auto [end, error] = std::from_chars(token.data(), last, v);
+    if (error != std::errc() || end != last) return false;
+    const std::int64_t max =
+        bits >= 64 ? std::numeric_limits<std::int64_t>::max() : (std::int64_t{1} << (bits - 1)) - 1;
+    return v <= max && v >= -max - 1;
+  }
+  std::uint64_t v = 0;
+  const auto [end, error] = std::from_chars(token.data(), last, v);
+  if (error != std::errc() || end != last) return false;
+  return bits >= 64 || v <= (std::uint64_t{1} << bits) - 1;
+}
+
+// A declared point count beyond the largest cloud: the message names the count and the limit.
+bool beyond_cloud_limit(std::uint64_t points) {
+  return points > kMaxCloudPoints;
+}
+
+std::string cloud_limit_text(std::uint64_t points) {
+  return std::to_string(points) + " points exceed the largest cloud read (" +
+         std::to_string(kMaxCloudPoints) + " points)";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writers
+
+// A georeferenced cloud (origin_m not zero) is written as origin + point in double, which float
+// cannot hold; any other cloud as the floats it stores.
+bool written_in_double(const PointCloud& cloud) {
+  return !cloud.origin_m.isZero();
+}
+
+namespace {
+
+template <typename T>
+void append_number_text(std::string& out, T value) {
+  // Shortest text that reads back as the same number.
+  std::array<char, 32> buffer{};
+  const auto r = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  out.append(buffer.data(), r.ptr);
+}
+
+// Each point as the numbers written: `emit(out, value)` for x, y and z, in float or double.
+template <typename Emit>
+void append_points(std::string& out, const PointCloud& cloud, const Emit& emit) {
+  const bool wide = written_in_double(cloud);
+  for (const auto& p : cloud.points) {
+    for (Eigen::Index axis = 0; axis < 3; ++axis) {
+      if (wide) {
+        emit(out, static_cast<double>(p[axis]) + cloud.origin_m[axis], axis);
+      } else {
+        emit(out, p[axis], axis);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void append_points_text(std::string& out, const PointCloud& cloud) {
+  out.reserve(out.size() + cloud.size() * (written_in_double(cloud) ? 60 : 36));
+  append_points(out, cloud, [](std::string& text, auto value, Eigen::Index axis) {
+    append_number_text(text, value);
+    text += axis < 2 ? ' ' : '\n';
+  });
+}
+
+void append_points_binary(std::string& out, const PointCloud& cloud) {
+  out.reserve(out.size() + cloud.size() * (written_in_double(cloud) ? 24 : 12));
+  append_points(out, cloud, [](std::string& bytes, auto value, Eigen::Index) {
+    append_little_endian(bytes, value);
+  });
+}
+
+}  // namespace sgdicp::io_detail

@@ -1,0 +1,476 @@
+// PCD: reading v0.5-v0.7 ascii, binary and binary_compressed (LZF); writing binary or ascii.
+#include "io_internal.hpp"
+
+#include <lzf.h>
+
+namespace sgdicp::io_detail {
+namespace {
+
+enum class PcdData { ascii, binary, binary_compressed };
+
+struct PcdField {
+  std::string name;
+  std::size_t size = 0;  // bytes per value
+  char type = 0;         // 'I', 'U' or 'F'
+  std::uint64_t count = 1;
+};
+
+struct PcdHeader {
+  std::vector<PcdField> fields;
+  std::uint64_t width = 0;
+  std::uint64_t height = 1;
+  std::uint64_t points = 0;
+  PcdData data = PcdData::ascii;
+  std::size_t data_offset = 0;
+  std::size_t data_line = 0;  // line of the DATA key
+  std::size_t fields_line = 0;
+  std::size_t type_line = 0;
+  std::size_t points_line = 0;
+  std::array<std::size_t, 3> xyz{};  // field index of x, y, z
+};
+
+PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
+  PcdHeader header;
+  bool have_fields = false;
+  bool have_size = false;
+  bool have_type = false;
+  bool have_width = false;
+  bool have_points = false;
+  bool have_data = false;
+  std::string_view line;
+  while (!have_data && cursor.next_line(line)) {
+    const std::size_t at = cursor.line();
+    const auto tokens = split_whitespace(line);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const std::string_view key = tokens[0];
+    const std::span<const std::string_view> values(tokens.begin() + 1, tokens.end());
+    const auto expect_values = [&](std::size_t n) {
+      if (values.size() != n) {
+        fail_line(name, at,
+                  std::string(key) + " needs " + std::to_string(n) + " value(s), got " +
+                      std::to_string(values.size()));
+      }
+    };
+    const auto per_field = [&]() {
+      if (!have_fields) fail_line(name, at, std::string(key) + " before FIELDS");
+      expect_values(header.fields.size());
+    };
+    const auto uint_value = [&](std::string_view token) {
+      std::uint64_t v = 0;
+      if (!parse_uint(token, v)) {
+        fail_line(name, at, std::string(key) + " value " + shown(token) + " is not a count");
+      }
+      return v;
+    };
+
+    if (key == "VERSION") {
+      expect_values(1);
+      constexpr std::array<std::string_view, 6> kKnown = {".5", "0.5", ".6", "0.6", ".7", "0.7"};
+      if (std::find(kKnown.begin(), kKnown.end(), values[0]) == kKnown.end()) {
+        fail_line(name, at, "unsupported PCD version " + shown(values[0]));
+      }
+    } else if (key == "FIELDS" || key == "COLUMNS") {  // COLUMNS: the v0.5 spelling
+      if (have_fields) fail_line(name, at, "second FIELDS line");
+      if (values.empty()) fail_line(name, at, "FIELDS lists no field");
+      for (const auto v : values) header.fields.push_back(PcdField{std::string(v)});
+      have_fields = true;
+      header.fields_line = at;
+    } else if (key == "SIZE") {
+      per_field();
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        const auto size = uint_value(values[i]);
+        if (size != 1 && size != 2 && size != 4 && size != 8) {
+          fail_line(name, at, "SIZE of field '" + header.fields[i].name + "' must be 1, 2, 4 or 8");
+        }
+        header.fields[i].size = static_cast<std::size_t>(size);
+      }
+      have_size = true;
+    } else if (key == "TYPE") {
+      per_field();
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        if (values[i] != "I" && values[i] != "U" && values[i] != "F") {
+          fail_line(name, at,
+                    "TYPE " + shown(values[i]) + " of field '" + header.fields[i].name +
+                        "' is not I, U or F");
+        }
+        header.fields[i].type = values[i][0];
+      }
+      have_type = true;
+      header.type_line = at;
+    } else if (key == "COUNT") {
+      per_field();
+      for (std::size_t i = 0; i < values.size(); ++i) {
+        header.fields[i].count = uint_value(values[i]);
+        if (header.fields[i].count == 0) {
+          fail_line(name, at, "COUNT of field '" + header.fields[i].name + "' is 0");
+        }
+      }
+    } else if (key == "WIDTH") {
+      expect_values(1);
+      header.width = uint_value(values[0]);
+      have_width = true;
+    } else if (key == "HEIGHT") {
+      expect_values(1);
+      header.height = uint_value(values[0]);
+    } else if (key == "VIEWPOINT") {
+      expect_values(7);
+      for (const auto v : values) {
+        if (double f = 0.0; !parse_number(v, f)) {
+          fail_line(name, at, "VIEWPOINT value " + shown(v) + " is not a number");
+        }
+      }
+    } else if (key == "POINTS") {
+      expect_values(1);
+      header.points = uint_value(values[0]);
+      have_points = true;
+      header.points_line = at;
+    } else if (key == "DATA") {
+      expect_values(1);
+      if (values[0] == "ascii") {
+        header.data = PcdData::ascii;
+      } else if (values[0] == "binary") {
+        header.data = PcdData::binary;
+      } else if (values[0] == "binary_compressed") {
+        header.data = PcdData::binary_compressed;
+      } else {
+        fail_line(name, at,
+                  "unknown DATA " + shown(values[0]) + " (ascii, binary or binary_compressed)");
+      }
+      have_data = true;
+      header.data_line = at;
+      header.data_offset = cursor.offset();
+    } else {
+      fail_line(name, at, "unknown PCD header key " + shown(key));
+    }
+  }
+
+  const std::size_t end_line = cursor.line();
+  if (!have_data) fail_line(name, end_line, "PCD header has no DATA line");
+  if (!have_fields) fail_line(name, end_line, "PCD header has no FIELDS line");
+  if (!have_size) fail_line(name, end_line, "PCD header has no SIZE line");
+  if (!have_type) fail_line(name, end_line, "PCD header has no TYPE line");
+  if (!have_width) fail_line(name, end_line, "PCD header has no WIDTH line");
+
+  for (const auto& field : header.fields) {
+    if (field.type == 'F' && field.size != 4 && field.size != 8) {
+      fail_line(name, header.type_line,
+                "float field '" + field.name + "' has SIZE " + std::to_string(field.size) +
+                    " (only 4 or 8)");
+    }
+  }
+  constexpr std::array<std::string_view, 3> kAxes = {"x", "y", "z"};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const auto found = std::find_if(header.fields.begin(), header.fields.end(),
+                                    [&](const PcdField& f) { return f.name == kAxes[axis]; });
+    if (found == header.fields.end()) {
+      fail_line(name, header.fields_line, "PCD has no '" + std::string(kAxes[axis]) + "' field");
+    }
+    if (std::find_if(found + 1, header.fields.end(), [&](const PcdField& f) {
+          return f.name == kAxes[axis];
+        }) != header.fields.end()) {
+      fail_line(name, header.fields_line, "field '" + found->name + "' appears twice");
+    }
+    if (found->type != 'F' || found->count != 1) {
+      fail_line(
+          name, header.type_line,
+          "field '" + found->name + "' must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)");
+    }
+    header.xyz[axis] = static_cast<std::size_t>(found - header.fields.begin());
+  }
+
+  const auto cells = checked_mul(header.width, header.height);
+  if (!have_points) {
+    if (!cells) fail_line(name, header.data_line, "WIDTH x HEIGHT overflows");
+    header.points = *cells;
+  } else if (!cells || *cells != header.points) {
+    fail_line(name, header.points_line,
+              "POINTS " + std::to_string(header.points) + " does not match WIDTH x HEIGHT = " +
+                  std::to_string(header.width) + " x " + std::to_string(header.height));
+  }
+  if (beyond_cloud_limit(header.points)) {
+    fail_line(name, have_points ? header.points_line : header.data_line,
+              cloud_limit_text(header.points));
+  }
+  return header;
+}
+
+// Every value of a data line is of its field's type: a number for F, an integer that fits SIZE
+// bytes for I and U. The line has as many values as the fields' COUNTs add up to.
+void check_pcd_values(const std::string& name, std::size_t line_number, const PcdHeader& header,
+                      std::string_view line) {
+  std::size_t field = 0;
+  std::uint64_t left = header.fields.empty() ? 0 : header.fields[0].count;
+  for (const std::string_view token : split_whitespace(line)) {
+    while (left == 0) left = header.fields[++field].count;
+    const PcdField& f = header.fields[field];
+    double ignored = 0.0;
+    const bool ok = f.type == 'F' ? parse_number(token, ignored)
+                                  : is_integer_token(token, f.size, f.type == 'I');
+    if (!ok) {
+      fail_line(name, line_number,
+                shown(token) + " is not " +
+                    (f.type == 'F'
+                         ? std::string("a number")
+                         : (f.type == 'I' ? "a signed" : "an unsigned") +
+                               std::string(" integer of ") + std::to_string(f.size) + " byte(s)") +
+                    " (field '" + f.name + "')");
+    }
+    --left;
+  }
+}
+
+void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor& cursor,
+                    PointSink& sink) {
+  // Column of x, y and z on a line, where fields with COUNT > 1 take several columns.
+  std::array<std::uint64_t, 3> column{};
+  std::uint64_t columns = 0;
+  for (std::size_t f = 0; f < header.fields.size(); ++f) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      if (header.xyz[axis] == f) column[axis] = columns;
+    }
+    const auto next = checked_add(columns, header.fields[f].count);
+    if (!next) fail_line(name, header.data_line, "COUNT values overflow");
+    columns = *next;
+  }
+
+  sink.reserve(header.points, cursor.remaining() / kMinTextPointBytes);
+  std::uint64_t read = 0;
+  std::string_view line;
+  while (read < header.points) {
+    if (!cursor.next_line(line)) {
+      fail_line(name, cursor.line(),
+                "expected " + std::to_string(header.points) + " points, file ends after " +
+                    std::to_string(read));
+    }
+    std::array<std::string_view, 3> xyz;
+    std::uint64_t count = 0;
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && is_space(line[i])) ++i;
+      const std::size_t start = i;
+      while (i < line.size() && !is_space(line[i])) ++i;
+      if (i == start) break;
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        if (column[axis] == count) xyz[axis] = line.substr(start, i - start);
+      }
+      ++count;
+    }
+    if (count == 0) continue;  // blank line
+    if (count != columns) {
+      fail_line(name, cursor.line(),
+                "expected " + std::to_string(columns) + " values, got " + std::to_string(count));
+    }
+    check_pcd_values(name, cursor.line(), header, line);
+    std::array<double, 3> p{};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      if (!parse_number(xyz[axis], p[axis])) {
+        fail_line(name, cursor.line(), shown(xyz[axis]) + " is not a number");
+      }
+    }
+    sink.add(p[0], p[1], p[2]);
+    ++read;
+  }
+  while (cursor.next_line(line)) {
+    if (!trim(line).empty()) {
+      fail_line(name, cursor.line(),
+                "more data than POINTS " + std::to_string(header.points) + " declares");
+    }
+  }
+}
+
+double load_pcd_coordinate(const char* p, std::size_t size) {
+  return size == 4 ? load<float>(p, false) : load<double>(p, false);
+}
+
+// Byte layout of one point: offset of each field and the total size.
+struct PcdLayout {
+  std::vector<std::uint64_t> field_offset;
+  std::uint64_t point_size = 0;
+};
+
+PcdLayout pcd_layout(const std::string& name, const PcdHeader& header) {
+  PcdLayout layout;
+  for (const auto& field : header.fields) {
+    layout.field_offset.push_back(layout.point_size);
+    const auto bytes = checked_mul(field.size, field.count);
+    const auto next = bytes ? checked_add(layout.point_size, *bytes) : std::nullopt;
+    if (!next) fail_line(name, header.data_line, "point size overflows");
+    layout.point_size = *next;
+  }
+  return layout;
+}
+
+// The bytes after binary point data must be none, or zeros that fill a page: PCL before 1.10
+// stretched its files to a page (4096 bytes, up to 64 KiB on some systems) plus the data.
+void check_pcd_end(const std::string& name, std::string_view data, std::size_t end) {
+  constexpr std::size_t kLargestPage = std::size_t{1} << 16;
+  const std::string_view rest = data.substr(end);
+  const bool page_padding =
+      rest.size() < kLargestPage && rest.find_first_not_of('\0') == std::string_view::npos;
+  if (!page_padding) {
+    fail_byte(name, end,
+              std::to_string(rest.size()) +
+                  " bytes after the point data (only zeros that fill a page may follow)");
+  }
+}
+
+void read_pcd_binary(const std::string& name, const PcdHeader& header, std::string_view data,
+                     PointSink& sink) {
+  const PcdLayout layout = pcd_layout(name, header);
+  const std::size_t available = data.size() - header.data_offset;
+  const auto need = checked_mul(header.points, layout.point_size);
+  if (!need || *need > available) {
+    fail_byte(name, header.data_offset,
+              "truncated binary data (need " + byte_count_text(need) +
+                  " bytes of point data, have " + std::to_string(available) + ")");
+  }
+  check_pcd_end(name, data, header.data_offset + static_cast<std::size_t>(*need));
+  const char* const base = data.data() + header.data_offset;
+  const std::size_t step = static_cast<std::size_t>(layout.point_size);
+  std::array<std::size_t, 3> offset{};
+  std::array<std::size_t, 3> size{};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    offset[axis] = static_cast<std::size_t>(layout.field_offset[header.xyz[axis]]);
+    size[axis] = header.fields[header.xyz[axis]].size;
+  }
+  const auto n = static_cast<std::size_t>(header.points);
+  sink.reserve(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const char* const point = base + i * step;
+    sink.add(load_pcd_coordinate(point + offset[0], size[0]),
+             load_pcd_coordinate(point + offset[1], size[1]),
+             load_pcd_coordinate(point + offset[2], size[2]));
+  }
+}
+
+// Size of the output of an LZF block, found by walking its control bytes without writing
+// anything, so that a lying or corrupt block is rejected before its output is allocated.
+// nullopt when the block is corrupt: a run or reference cut off by the end, or a back reference
+// to before the start of the output. Format: a control byte c < 32 starts a run of c + 1 literal
+// bytes; otherwise it is a back reference of length (c >> 5) + 2 (a second byte extends length
+// 7), its offset ((c & 31) << 8) + the next byte + 1.
+std::optional<std::uint64_t> lzf_output_size(std::string_view block) {
+  std::uint64_t out = 0;
+  std::size_t in = 0;
+  while (in < block.size()) {
+    const auto control = static_cast<unsigned char>(block[in++]);
+    if (control < 32) {
+      const std::size_t run = control + 1u;
+      if (run > block.size() - in) return std::nullopt;
+      in += run;
+      out += run;
+      continue;
+    }
+    std::uint64_t length = control >> 5;
+    if (length == 7) {
+      if (in >= block.size()) return std::nullopt;
+      length += static_cast<unsigned char>(block[in++]);
+    }
+    if (in >= block.size()) return std::nullopt;
+    const std::uint64_t offset =
+        ((std::uint64_t{control} & 31u) << 8) + static_cast<unsigned char>(block[in++]) + 1;
+    if (offset > out) return std::nullopt;
+    out += length + 2;
+  }
+  return out;
+}
+
+void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::string_view data,
+                         PointSink& sink) {
+  // The most LZF can expand: a 3-byte back reference emits at most 264 bytes.
+  constexpr std::uint64_t kMaxLzfRatio = 264 / 3;
+  const PcdLayout layout = pcd_layout(name, header);
+  const std::size_t start = header.data_offset;
+  const std::size_t available = data.size() - start;
+  if (available < 8) {
+    fail_byte(name, start,
+              "truncated compressed header (need 8 bytes, have " + std::to_string(available) + ")");
+  }
+  const auto compressed = load<std::uint32_t>(data.data() + start, false);
+  const auto uncompressed = load<std::uint32_t>(data.data() + start + 4, false);
+  const auto need = checked_mul(header.points, layout.point_size);
+  if (!need || *need != uncompressed) {
+    fail_byte(name, start + 4,
+              "uncompressed size " + std::to_string(uncompressed) +
+                  " does not match POINTS x point size = " + byte_count_text(need));
+  }
+  if (compressed > available - 8) {
+    fail_byte(name, start + 8,
+              "truncated compressed data (need " + std::to_string(compressed) + " bytes, have " +
+                  std::to_string(available - 8) + ")");
+  }
+  check_pcd_end(name, data, start + 8 + compressed);
+  if (uncompressed == 0) return;
+  if (uncompressed > std::uint64_t{compressed} * kMaxLzfRatio) {
+    fail_byte(name, start + 4,
+              "uncompressed size " + std::to_string(uncompressed) + " is impossible for " +
+                  std::to_string(compressed) + " bytes of LZF data");
+  }
+  const std::string_view block = data.substr(start + 8, compressed);
+  if (const auto decoded = lzf_output_size(block); decoded != uncompressed) {
+    fail_byte(name, start + 8,
+              !decoded ? "corrupt LZF data"
+                       : "LZF data decompress to " + std::to_string(*decoded) +
+                             " bytes, expected " + std::to_string(uncompressed));
+  }
+  std::vector<char> raw(uncompressed);
+  const unsigned int got =
+      lzf_decompress(data.data() + start + 8, compressed, raw.data(), uncompressed);
+  if (got != uncompressed) {
+    fail_byte(name, start + 8,
+              got == 0 ? "corrupt LZF data"
+                       : "LZF data decompress to " + std::to_string(got) + " bytes, expected " +
+                             std::to_string(uncompressed));
+  }
+  // Structure of arrays: all values of the first field, then all of the second, ...
+  const auto n = static_cast<std::size_t>(header.points);
+  std::array<const char*, 3> column{};
+  std::array<std::size_t, 3> size{};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const std::size_t field = header.xyz[axis];
+    column[axis] = raw.data() + n * static_cast<std::size_t>(layout.field_offset[field]);
+    size[axis] = header.fields[field].size;
+  }
+  sink.reserve(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    sink.add(load_pcd_coordinate(column[0] + i * size[0], size[0]),
+             load_pcd_coordinate(column[1] + i * size[1], size[1]),
+             load_pcd_coordinate(column[2] + i * size[2], size[2]));
+  }
+}
+
+}  // namespace
+
+void read_pcd(const std::string& name, std::string_view data, PointSink& sink) {
+  TextCursor cursor(data, 0, 1);
+  const PcdHeader header = parse_pcd_header(name, cursor);
+  sink.result().points_in_file = static_cast<std::size_t>(header.points);
+  switch (header.data) {
+    case PcdData::ascii:
+      read_pcd_ascii(name, header, cursor, sink);
+      break;
+    case PcdData::binary:
+      read_pcd_binary(name, header, data, sink);
+      break;
+    case PcdData::binary_compressed:
+      read_pcd_compressed(name, header, data, sink);
+      break;
+  }
+}
+
+std::string pcd_text(const PointCloud& cloud, Encoding encoding) {
+  const std::string n = std::to_string(cloud.size());
+  const std::string sizes = written_in_double(cloud) ? "SIZE 8 8 8\n" : "SIZE 4 4 4\n";
+  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\n" +
+                    sizes + "TYPE F F F\nCOUNT 1 1 1\nWIDTH " + n +
+                    "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + n + "\nDATA " +
+                    (encoding == Encoding::ascii ? "ascii" : "binary") + "\n";
+  if (encoding == Encoding::ascii) {
+    append_points_text(out, cloud);
+  } else {
+    append_points_binary(out, cloud);
+  }
+  return out;
+}
+
+}  // namespace sgdicp::io_detail

@@ -1,0 +1,395 @@
+// PLY: reading ascii, binary little and big endian; writing binary little endian or ascii.
+#include "io_internal.hpp"
+
+namespace sgdicp::io_detail {
+namespace {
+
+enum class PlyType { i8, u8, i16, u16, i32, u32, f32, f64 };
+enum class PlyEncoding { ascii, binary_little_endian, binary_big_endian };
+
+std::optional<PlyType> ply_type(std::string_view name) {
+  static constexpr std::array<std::pair<std::string_view, PlyType>, 16> kNames = {{
+      {"char", PlyType::i8},
+      {"int8", PlyType::i8},
+      {"uchar", PlyType::u8},
+      {"uint8", PlyType::u8},
+      {"short", PlyType::i16},
+      {"int16", PlyType::i16},
+      {"ushort", PlyType::u16},
+      {"uint16", PlyType::u16},
+      {"int", PlyType::i32},
+      {"int32", PlyType::i32},
+      {"uint", PlyType::u32},
+      {"uint32", PlyType::u32},
+      {"float", PlyType::f32},
+      {"float32", PlyType::f32},
+      {"double", PlyType::f64},
+      {"float64", PlyType::f64},
+  }};
+  for (const auto& [text, type] : kNames) {
+    if (text == name) return type;
+  }
+  return std::nullopt;
+}
+
+// The PLY name of a type, from the table above (its first spelling).
+std::string ply_type_name(PlyType type) {
+  for (const std::string_view name :
+       {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"}) {
+    if (ply_type(name) == type) return std::string(name);
+  }
+  return "value";
+}
+
+std::size_t ply_size(PlyType type) {
+  switch (type) {
+    case PlyType::i8:
+    case PlyType::u8:
+      return 1;
+    case PlyType::i16:
+    case PlyType::u16:
+      return 2;
+    case PlyType::i32:
+    case PlyType::u32:
+    case PlyType::f32:
+      return 4;
+    case PlyType::f64:
+      return 8;
+  }
+  return 0;
+}
+
+double ply_value(PlyType type, const char* p, bool big_endian) {
+  switch (type) {
+    case PlyType::i8:
+      return load<std::int8_t>(p, big_endian);
+    case PlyType::u8:
+      return load<std::uint8_t>(p, big_endian);
+    case PlyType::i16:
+      return load<std::int16_t>(p, big_endian);
+    case PlyType::u16:
+      return load<std::uint16_t>(p, big_endian);
+    case PlyType::i32:
+      return load<std::int32_t>(p, big_endian);
+    case PlyType::u32:
+      return load<std::uint32_t>(p, big_endian);
+    case PlyType::f32:
+      return load<float>(p, big_endian);
+    case PlyType::f64:
+      return load<double>(p, big_endian);
+  }
+  return 0.0;
+}
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::f32;  // the item type for a list
+  bool is_list = false;
+  PlyType count_type = PlyType::u8;
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+  std::size_t line = 0;
+};
+
+struct PlyHeader {
+  PlyEncoding encoding = PlyEncoding::ascii;
+  std::vector<PlyElement> elements;
+  std::size_t vertex = 0;            // index of the vertex element
+  std::array<std::size_t, 3> xyz{};  // property index of x, y, z in it
+  std::size_t data_offset = 0;
+  std::size_t end_line = 0;  // line of end_header
+};
+
+PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
+  PlyHeader header;
+  std::string_view line;
+  if (!cursor.next_line(line) || trim(line) != "ply") {
+    fail_line(name, 1, "not a PLY file (the first line must be 'ply')");
+  }
+  bool have_format = false;
+  bool have_end = false;
+  while (!have_end && cursor.next_line(line)) {
+    const std::size_t at = cursor.line();
+    const auto tokens = split_whitespace(line);
+    if (tokens.empty()) continue;
+    const std::string_view keyword = tokens[0];
+    if (keyword == "format") {
+      if (have_format) fail_line(name, at, "second format line");
+      const bool known_version = tokens.size() == 3 && (tokens[2] == "1.0" || tokens[2] == "1");
+      if (known_version && tokens[1] == "ascii") {
+        header.encoding = PlyEncoding::ascii;
+      } else if (known_version && tokens[1] == "binary_little_endian") {
+        header.encoding = PlyEncoding::binary_little_endian;
+      } else if (known_version && tokens[1] == "binary_big_endian") {
+        header.encoding = PlyEncoding::binary_big_endian;
+      } else {
+        fail_line(name, at,
+                  "bad format line " + shown(trim(line)) +
+                      " (expected 'format ascii|binary_little_endian|binary_big_endian 1.0')");
+      }
+      have_format = true;
+    } else if (keyword == "comment" || keyword == "obj_info") {
+      continue;
+    } else if (keyword == "element") {
+      std::uint64_t count = 0;
+      if (tokens.size() != 3 || !parse_uint(tokens[2], count)) {
+        fail_line(name, at,
+                  "bad element line " + shown(trim(line)) + " (expected 'element <name> <count>')");
+      }
+      header.elements.push_back(PlyElement{std::string(tokens[1]), count, {}, at});
+    } else if (keyword == "property") {
+      if (header.elements.empty()) fail_line(name, at, "property before any element");
+      PlyProperty property;
+      if (tokens.size() == 5 && tokens[1] == "list") {
+        const auto count_type = ply_type(tokens[2]);
+        const auto item_type = ply_type(tokens[3]);
+        if (!count_type || !item_type) {
+          fail_line(name, at, "unknown type in " + shown(trim(line)));
+        }
+        if (*count_type == PlyType::f32 || *count_type == PlyType::f64) {
+          fail_line(name, at, "list length type must be an integer type");
+        }
+        property = PlyProperty{std::string(tokens[4]), *item_type, true, *count_type};
+      } else if (tokens.size() == 3) {
+        const auto type = ply_type(tokens[1]);
+        if (!type) fail_line(name, at, "unknown property type " + shown(tokens[1]));
+        property = PlyProperty{std::string(tokens[2]), *type};
+      } else {
+        fail_line(name, at, "bad property line " + shown(trim(line)));
+      }
+      header.elements.back().properties.push_back(std::move(property));
+    } else if (keyword == "end_header") {
+      have_end = true;
+      header.end_line = at;
+      header.data_offset = cursor.offset();
+    } else {
+      fail_line(name, at, "unknown PLY header keyword " + shown(keyword));
+    }
+  }
+  if (!have_end) fail_line(name, cursor.line(), "PLY header has no end_header line");
+  if (!have_format) fail_line(name, header.end_line, "PLY header has no format line");
+
+  const auto is_vertex = [](const PlyElement& e) { return e.name == "vertex"; };
+  const auto vertex = std::find_if(header.elements.begin(), header.elements.end(), is_vertex);
+  if (vertex == header.elements.end())
+    fail_line(name, header.end_line, "PLY has no vertex element");
+  if (std::find_if(vertex + 1, header.elements.end(), is_vertex) != header.elements.end()) {
+    fail_line(name, header.end_line, "PLY has two vertex elements");
+  }
+  header.vertex = static_cast<std::size_t>(vertex - header.elements.begin());
+  constexpr std::array<std::string_view, 3> kAxes = {"x", "y", "z"};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const auto& props = vertex->properties;
+    const auto found = std::find_if(props.begin(), props.end(),
+                                    [&](const PlyProperty& p) { return p.name == kAxes[axis]; });
+    if (found == props.end()) {
+      fail_line(name, vertex->line,
+                "vertex element has no '" + std::string(kAxes[axis]) + "' property");
+    }
+    if (found->is_list)
+      fail_line(name, vertex->line, "vertex property '" + found->name + "' is a list");
+    header.xyz[axis] = static_cast<std::size_t>(found - props.begin());
+  }
+  if (beyond_cloud_limit(vertex->count)) {
+    fail_line(name, vertex->line, "element vertex: " + cloud_limit_text(vertex->count));
+  }
+  return header;
+}
+
+// Whether a token is a value of a PLY type: a number for float and double, an integer that
+// fits the type for the others.
+bool is_ply_value(PlyType type, std::string_view token) {
+  double ignored = 0.0;
+  if (type == PlyType::f32 || type == PlyType::f64) return parse_number(token, ignored);
+  const bool is_signed = type == PlyType::i8 || type == PlyType::i16 || type == PlyType::i32;
+  return is_integer_token(token, ply_size(type), is_signed);
+}
+
+void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor& cursor,
+                    PointSink& sink) {
+  std::string_view token;
+  for (std::size_t e = 0; e < header.elements.size(); ++e) {
+    const PlyElement& element = header.elements[e];
+    const bool is_vertex = e == header.vertex;
+    if (element.properties.empty()) continue;  // records without properties take no text
+    if (is_vertex) sink.reserve(element.count, cursor.remaining() / kMinTextPointBytes);
+    for (std::uint64_t r = 0; r < element.count; ++r) {
+      const auto next = [&]() {
+        if (!cursor.next_token(token)) {
+          fail_line(name, cursor.line(),
+                    "unexpected end of file in element '" + element.name + "' (record " +
+                        std::to_string(r + 1) + " of " + std::to_string(element.count) + ")");
+        }
+        return token;
+      };
+      std::array<double, 3> p{};
+      for (std::size_t k = 0; k < element.properties.size(); ++k) {
+        const PlyProperty& property = element.properties[k];
+        const std::string_view value = next();
+        const auto check = [&](PlyType type, std::string_view text) {
+          if (!is_ply_value(type, text)) {
+            fail_line(name, cursor.line(),
+                      shown(text) + " is not " +
+                          (type == PlyType::f32 || type == PlyType::f64
+                               ? std::string("a number")
+                               : "a " + ply_type_name(type) + " value") +
+                          " (property '" + property.name + "')");
+          }
+        };
+        if (property.is_list) {
+          std::uint64_t length = 0;
+          if (!parse_uint(value, length) || !is_ply_value(property.count_type, value)) {
+            fail_line(name, cursor.line(),
+                      shown(value) + " is not a list length of type " +
+                          ply_type_name(property.count_type) + " (property '" + property.name +
+                          "')");
+          }
+          for (std::uint64_t i = 0; i < length; ++i) check(property.type, next());
+          continue;
+        }
+        check(property.type, value);
+        if (is_vertex) {
+          for (std::size_t axis = 0; axis < 3; ++axis) {
+            if (header.xyz[axis] == k && !parse_number(value, p[axis])) {
+              fail_line(name, cursor.line(),
+                        shown(value) + " is not a number (property '" + property.name + "')");
+            }
+          }
+        }
+      }
+      if (is_vertex) sink.add(p[0], p[1], p[2]);
+    }
+  }
+  if (cursor.next_token(token)) {
+    fail_line(name, cursor.line(), "unexpected data after the last element: " + shown(token));
+  }
+}
+
+// Fixed record size of an element without list properties.
+std::optional<std::size_t> ply_fixed_stride(const PlyElement& element) {
+  std::size_t stride = 0;
+  for (const auto& property : element.properties) {
+    if (property.is_list) return std::nullopt;
+    stride += ply_size(property.type);
+  }
+  return stride;
+}
+
+void read_ply_binary(const std::string& name, const PlyHeader& header, std::string_view data,
+                     PointSink& sink) {
+  const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
+  std::size_t pos = header.data_offset;
+  for (std::size_t e = 0; e < header.elements.size(); ++e) {
+    const PlyElement& element = header.elements[e];
+    const bool is_vertex = e == header.vertex;
+    std::array<std::size_t, 3> xyz_offset{};  // offset of x, y, z in a vertex record
+    std::array<PlyType, 3> xyz_type{};
+    for (std::size_t axis = 0; axis < 3 && is_vertex; ++axis) {
+      xyz_type[axis] = element.properties[header.xyz[axis]].type;
+    }
+
+    if (const auto stride = ply_fixed_stride(element)) {
+      // Fixed-size records: one bounds check for the whole element.
+      const std::size_t available = data.size() - pos;
+      const auto need = checked_mul(element.count, *stride);
+      if (!need || *need > available) {
+        fail_byte(name, pos,
+                  "truncated binary data (need " + byte_count_text(need) + " bytes of " +
+                      element.name + " data, have " + std::to_string(available) + ")");
+      }
+      if (is_vertex) {
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          for (std::size_t k = 0; k < header.xyz[axis]; ++k) {
+            xyz_offset[axis] += ply_size(element.properties[k].type);
+          }
+        }
+        const auto n = static_cast<std::size_t>(element.count);
+        sink.reserve(n, n);
+        for (std::size_t i = 0; i < n; ++i) {
+          const char* const record = data.data() + pos + i * *stride;
+          sink.add(ply_value(xyz_type[0], record + xyz_offset[0], big_endian),
+                   ply_value(xyz_type[1], record + xyz_offset[1], big_endian),
+                   ply_value(xyz_type[2], record + xyz_offset[2], big_endian));
+        }
+      }
+      pos += static_cast<std::size_t>(*need);
+      continue;
+    }
+
+    // Records with lists: walk them one property at a time.
+    if (is_vertex) sink.reserve(element.count, (data.size() - pos) / 3);
+    for (std::uint64_t r = 0; r < element.count; ++r) {
+      const auto take = [&](std::uint64_t bytes) {
+        const std::size_t start = pos;
+        if (bytes > data.size() - pos) {
+          fail_byte(name, pos,
+                    "truncated binary data in element '" + element.name + "' (record " +
+                        std::to_string(r + 1) + " of " + std::to_string(element.count) + ")");
+        }
+        pos += static_cast<std::size_t>(bytes);
+        return start;
+      };
+      for (std::size_t k = 0; k < element.properties.size(); ++k) {
+        const PlyProperty& property = element.properties[k];
+        if (!property.is_list) {
+          const std::size_t at = take(ply_size(property.type));
+          for (std::size_t axis = 0; axis < 3 && is_vertex; ++axis) {
+            if (header.xyz[axis] == k) xyz_offset[axis] = at;
+          }
+          continue;
+        }
+        const std::size_t at = take(ply_size(property.count_type));
+        const double length = ply_value(property.count_type, data.data() + at, big_endian);
+        if (length < 0) {
+          fail_byte(name, at, "negative list length in element '" + element.name + "'");
+        }
+        const auto bytes = checked_mul(static_cast<std::uint64_t>(length), ply_size(property.type));
+        take(bytes ? *bytes : std::numeric_limits<std::uint64_t>::max());
+      }
+      if (is_vertex) {
+        sink.add(ply_value(xyz_type[0], data.data() + xyz_offset[0], big_endian),
+                 ply_value(xyz_type[1], data.data() + xyz_offset[1], big_endian),
+                 ply_value(xyz_type[2], data.data() + xyz_offset[2], big_endian));
+      }
+    }
+  }
+  if (pos != data.size()) {
+    fail_byte(name, pos,
+              std::to_string(data.size() - pos) +
+                  " bytes after the last element (binary PLY ends with its data)");
+  }
+}
+
+}  // namespace
+
+void read_ply(const std::string& name, std::string_view data, PointSink& sink) {
+  TextCursor cursor(data, 0, 1);
+  const PlyHeader header = parse_ply_header(name, cursor);
+  sink.result().points_in_file = static_cast<std::size_t>(header.elements[header.vertex].count);
+  if (header.encoding == PlyEncoding::ascii) {
+    read_ply_ascii(name, header, cursor, sink);
+  } else {
+    read_ply_binary(name, header, data, sink);
+  }
+}
+
+std::string ply_text(const PointCloud& cloud, Encoding encoding) {
+  const std::string type = written_in_double(cloud) ? "double" : "float";
+  std::string out = "ply\nformat ";
+  out += encoding == Encoding::ascii ? "ascii" : "binary_little_endian";
+  out += " 1.0\ncomment written by sgdicp\nelement vertex " + std::to_string(cloud.size()) +
+         "\nproperty " + type + " x\nproperty " + type + " y\nproperty " + type +
+         " z\nend_header\n";
+  if (encoding == Encoding::ascii) {
+    append_points_text(out, cloud);
+  } else {
+    append_points_binary(out, cloud);
+  }
+  return out;
+}
+
+}  // namespace sgdicp::io_detail
