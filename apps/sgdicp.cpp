@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "sgdicp 0.1.0");
   sgdicp::cli::add_register_command(app);
   sgdicp::cli::add_bench_command(app);
+  sgdicp::cli::add_odometry_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
