@@ -222,7 +222,17 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     report.message = "no point within the range limits";
     return finish(report, PointCloud{}, started);
   }
-  const PointCloud map_frame = voxel_downsample(cropped, 0.5 * voxel_size_m_);
+  PointCloud map_frame = voxel_downsample(cropped, 0.5 * voxel_size_m_);
+  // What the cost needs of the map, estimated on this frame alone (a few thousand points, in its
+  // own sensor frame, facing the sensor) rather than over the whole map every frame.
+  const bool stochastic = method_->solver == Solver::sgd;
+  const CostType cost = stochastic ? sgd_.cost : batch_.cost;
+  const NeighborhoodSettings& neighborhood = stochastic ? sgd_.neighborhood : batch_.neighborhood;
+  if (needs_covariances(cost)) {
+    estimate_covariances(map_frame, neighborhood);
+  } else if (needs_reference_normals(cost)) {
+    estimate_normals(map_frame, neighborhood);
+  }
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
     report.message = poses_.empty() ? "first frame" : "map restarted (no map before)";
@@ -235,9 +245,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
 
   const double build_start = now_ms();
   ReferenceIndex index(map_->points());
-  const bool stochastic = method_->solver == Solver::sgd;
-  prepare_reference(index, stochastic ? sgd_.cost : batch_.cost,
-                    stochastic ? sgd_.neighborhood : batch_.neighborhood);
+  prepare_reference(index, cost, neighborhood);
   report.index_build_ms = now_ms() - build_start;
   report.map_points = index.size();
 

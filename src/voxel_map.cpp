@@ -33,21 +33,33 @@ VoxelMap::Key VoxelMap::key_of(const Eigen::Vector3f& p) const {
 }
 
 void VoxelMap::add(const PointCloud& cloud) {
-  for (const Eigen::Vector3f& p : cloud.points) {
+  const bool normals = cloud.has_normals(), covariances = cloud.has_covariances();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
     if (!p.allFinite()) continue;
-    auto& voxel = voxels_[key_of(p)];
-    if (voxel.size() >= max_points_) continue;
-    if (voxel.empty()) voxel.reserve(max_points_);
-    voxel.push_back(p);
+    Voxel& voxel = voxels_[key_of(p)];
+    if (voxel.points.size() >= max_points_) continue;
+    voxel.points.push_back(p);
     ++points_;
+    if (normals) {
+      voxel.normals.push_back(cloud.normals[i]);
+      ++normals_;
+    }
+    if (covariances) {
+      voxel.covariances.push_back(cloud.covariances[i]);
+      ++covariances_;
+    }
   }
 }
 
 void VoxelMap::remove_far_from(const Eigen::Vector3d& centre_m, double radius_m) {
   const double r2 = radius_m * radius_m;
   for (auto it = voxels_.begin(); it != voxels_.end();) {
-    if ((it->second.front().cast<double>() - centre_m).squaredNorm() > r2) {
-      points_ -= it->second.size();
+    const Voxel& v = it->second;
+    if ((v.points.front().cast<double>() - centre_m).squaredNorm() > r2) {
+      points_ -= v.points.size();
+      normals_ -= v.normals.size();
+      covariances_ -= v.covariances.size();
       it = voxels_.erase(it);
     } else {
       ++it;
@@ -57,16 +69,23 @@ void VoxelMap::remove_far_from(const Eigen::Vector3d& centre_m, double radius_m)
 
 PointCloud VoxelMap::points() const {
   PointCloud out;
+  const bool normals = points_ > 0 && normals_ == points_;
+  const bool covariances = points_ > 0 && covariances_ == points_;
   out.points.reserve(points_);
   for (const auto& [key, voxel] : voxels_) {
-    out.points.insert(out.points.end(), voxel.begin(), voxel.end());
+    out.points.insert(out.points.end(), voxel.points.begin(), voxel.points.end());
+    if (normals) out.normals.insert(out.normals.end(), voxel.normals.begin(), voxel.normals.end());
+    if (covariances) {
+      out.covariances.insert(out.covariances.end(), voxel.covariances.begin(),
+                             voxel.covariances.end());
+    }
   }
   return out;
 }
 
 void VoxelMap::clear() {
   voxels_.clear();
-  points_ = 0;
+  points_ = normals_ = covariances_ = 0;
 }
 
 }  // namespace sgdicp

@@ -21,13 +21,15 @@ class VoxelMap {
   /// Adds the points of `cloud` (in the map frame): a point enters its voxel while the voxel
   /// holds fewer than max_points_per_voxel points, and is dropped otherwise (the first points
   /// of a voxel stay: a static world is seen again, not re-measured). Non-finite points are
-  /// skipped.
+  /// skipped. The points' normals and covariances, when the cloud has them, enter with them
+  /// (estimated once per frame, not over the whole map each frame: docs/odometry.md).
   void add(const PointCloud& cloud);
 
   /// Drops every voxel whose first point lies farther than radius_m from `centre_m`.
   void remove_far_from(const Eigen::Vector3d& centre_m, double radius_m);
 
-  /// Every point of the map, one cloud (the order of the voxels in the hash map).
+  /// Every point of the map, one cloud (the order of the voxels in the hash map), with normals
+  /// (covariances) when every point of the map came with one.
   [[nodiscard]] PointCloud points() const;
 
   [[nodiscard]] std::size_t size() const noexcept { return points_; }
@@ -49,8 +51,15 @@ class VoxelMap {
 
   double voxel_size_m_;
   std::size_t max_points_;
+  struct Voxel {
+    std::vector<Eigen::Vector3f> points;
+    std::vector<Eigen::Vector3f> normals;
+    std::vector<Eigen::Matrix3f> covariances;
+  };
   std::size_t points_ = 0;
-  std::unordered_map<Key, std::vector<Eigen::Vector3f>, KeyHash> voxels_;
+  std::size_t normals_ = 0;      ///< points that came with a normal
+  std::size_t covariances_ = 0;  ///< ... with a covariance
+  std::unordered_map<Key, Voxel, KeyHash> voxels_;
 };
 
 }  // namespace sgdicp
