@@ -54,6 +54,7 @@ OdometrySettings odometry_settings(const OdometryOptions& o) {
   }
   // A d_max given on the command line is used as is, every frame.
   s.adaptive_threshold = !o.settings.values.contains("max-distance");
+  s.step_within_threshold = !o.settings.values.contains("learning-rate");
   s.validate(SettingNames::cli);
   return s;
 }

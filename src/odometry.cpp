@@ -44,6 +44,21 @@ double range_percentile_m(const PointCloud& cloud) {
   return ranges[static_cast<std::size_t>(k)];
 }
 
+// Caps a length-per-iteration step (Adam, RMSProp) at a quarter of d_max in scaled units, the
+// scale taken as the largest side of the map's box (the joint box of a registration is about
+// that of the map, which holds the frame).
+void cap_step(SgdSettings& s, const ReferenceIndex& map) {
+  const auto type = s.optimizer.type;
+  if (type != OptimizerType::adam && type != OptimizerType::rmsprop) return;
+  const BoundingBox& box = map.bounding_box();
+  const double scale_m = (box.max - box.min).maxCoeff();
+  if (!(scale_m > 0.0)) return;
+  const double d_max = s.max_correspondence_distance.unit == Distance::Unit::metres
+                           ? s.max_correspondence_distance.value / scale_m
+                           : s.max_correspondence_distance.value;
+  s.optimizer.learning_rate = std::min(s.optimizer.learning_rate, 0.25 * d_max);
+}
+
 }  // namespace
 
 // ---- settings
@@ -241,7 +256,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   const PointCloud source = voxel_downsample(map_frame, 1.5 * voxel_size_m_);
   report.source_points = source.size();
   const double sigma = threshold_->sigma_m();
-  report.threshold_m = 3.0 * sigma;
+  if (settings_.adaptive_threshold) report.threshold_m = 3.0 * sigma;
 
   const double build_start = now_ms();
   ReferenceIndex index(map_->points());
@@ -255,6 +270,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     if (stochastic) {
       SgdSettings s = sgd_;
       if (settings_.adaptive_threshold) s.max_correspondence_distance = Distance::metres(3 * sigma);
+      if (settings_.step_within_threshold) cap_step(s, index);
       r = align(source, index, s, T_guess);
     } else {
       BatchSettings b = batch_;

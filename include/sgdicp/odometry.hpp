@@ -53,6 +53,11 @@ struct OdometrySettings {
   /// Derive d_max from the observed deviations (true), or keep the registration settings' own
   /// max_correspondence_distance (false; the CLI and Python set it when --max-distance is given).
   bool adaptive_threshold = true;
+  /// Adam and RMSProp step a length per iteration (their learning rate, in scaled units): cap it
+  /// at a quarter of each frame's d_max, so the first steps cannot jump past every
+  /// correspondence (false: the settings' learning rate as is; the CLI and Python set it when
+  /// --learning-rate is given). docs/odometry.md.
+  bool step_within_threshold = true;
 
   /// Throws InvalidSettingsError naming the first setting out of range (odometry_settings_table),
   /// spelled as `names` says.
@@ -108,7 +113,7 @@ struct FrameReport {
   std::size_t map_points = 0;     ///< map points it was registered to
   double inlier_ratio = 0.0;      ///< of the registration (result.hpp)
   double inlier_rmse_m = 0.0;
-  double threshold_m = 0.0;     ///< d_max given to the registration (3 sigma), metres
+  double threshold_m = 0.0;     ///< adaptive d_max given (3 sigma), metres; 0 when fixed
   double index_build_ms = 0.0;  ///< KD-tree over the map (plus normals / covariances)
   double time_ms = 0.0;         ///< the whole frame: thinning, index, registration, map update
 };

@@ -31,6 +31,7 @@ OdometrySettings take_odometry_keywords(py::dict& overrides) {
   }
   for (const auto& key : taken) overrides.attr("pop")(key);
   s.adaptive_threshold = !overrides.contains("max_distance");
+  s.step_within_threshold = !overrides.contains("learning_rate");
   s.validate(SettingNames::python);
   return s;
 }
@@ -91,7 +92,8 @@ void bind_odometry(py::module_& m) {
       .def_readonly("inlier_rmse_m", &FrameReport::inlier_rmse_m,
                     "Inlier RMSE of the registration, metres.")
       .def_readonly("threshold_m", &FrameReport::threshold_m,
-                    "d_max given to the registration (3 sigma of the adaptive threshold), metres.")
+                    "d_max given to the registration (3 sigma of the adaptive threshold), metres; 0 when "
+                    "max_distance= fixes it.")
       .def_readonly("index_build_ms", &FrameReport::index_build_ms,
                     "KD-tree build over the map (plus normals or covariances), milliseconds.")
       .def_readonly("time_ms", &FrameReport::time_ms,
