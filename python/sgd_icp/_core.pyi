@@ -1112,7 +1112,9 @@ class FrameReport:
         """Inlier RMSE of the registration, metres."""
     @property
     def threshold_m(self) -> float:
-        """d_max given to the registration (3 sigma of the adaptive threshold), metres."""
+        """d_max given to the registration (3 sigma of the adaptive threshold), metres; 0 when
+        max_distance= fixes it.
+        """
     @property
     def index_build_ms(self) -> float:
         """KD-tree build over the map (plus normals or covariances), milliseconds."""
