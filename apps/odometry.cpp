@@ -222,7 +222,10 @@ void add_odometry_command(CLI::App& app) {
       "odometry",
       "Scan-to-map odometry over a folder of frames: each frame registered to a local voxel map "
       "of the frames before it, from a constant-velocity prediction. Writes the pose of every "
-      "frame in the first frame's coordinates (docs/odometry.md).");
+      "frame in the first frame's coordinates (docs/odometry.md). The registration options below "
+      "apply to each frame; giving --max-distance fixes d_max (no adaptive threshold), giving "
+      "--learning-rate keeps it uncapped (Adam and RMSProp steps are otherwise capped at d_max / "
+      "4).");
   cmd->add_option("INPUT", o->input,
                   "Folder of frames, sorted by name: point clouds of one format (.pcd .ply .bin "
                   ".xyz .txt .csv .vtk .f32), or a KITTI sequence folder (velodyne/*.bin, "

@@ -46,12 +46,20 @@ Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
   }
   SgdSettings sgd;
   BatchSettings batch;
-  if (m.solver == Solver::sgd) {
-    if (m.cost) sgd.cost = *m.cost;
-    sgd = with_overrides(sgd, overrides);
-  } else {
-    batch.cost = *m.cost;
-    batch = with_batch_overrides(batch, overrides, m.name);
+  try {
+    if (m.solver == Solver::sgd) {
+      if (m.cost) sgd.cost = *m.cost;
+      sgd = with_overrides(sgd, overrides);
+    } else {
+      batch.cost = *m.cost;
+      batch = with_batch_overrides(batch, overrides, m.name);
+    }
+  } catch (const py::type_error& e) {
+    std::string names;
+    for (const auto& s : odometry_settings_table()) {
+      names += (names.empty() ? "" : ", ") + s.spelled(SettingNames::field);
+    }
+    throw py::type_error(std::string(e.what()) + "; the odometry keywords: " + names);
   }
   return Odometry(settings, m.name, sgd, batch);
 }
@@ -91,9 +99,10 @@ void bind_odometry(py::module_& m) {
       .def_readonly("inlier_ratio", &FrameReport::inlier_ratio, "Inlier ratio of the registration.")
       .def_readonly("inlier_rmse_m", &FrameReport::inlier_rmse_m,
                     "Inlier RMSE of the registration, metres.")
-      .def_readonly("threshold_m", &FrameReport::threshold_m,
-                    "d_max given to the registration (3 sigma of the adaptive threshold), metres; 0 when "
-                    "max_distance= fixes it.")
+      .def_readonly(
+          "threshold_m", &FrameReport::threshold_m,
+          "d_max given to the registration (3 sigma of the adaptive threshold), metres; 0 when "
+          "max_distance= fixes it.")
       .def_readonly("index_build_ms", &FrameReport::index_build_ms,
                     "KD-tree build over the map (plus normals or covariances), milliseconds.")
       .def_readonly("time_ms", &FrameReport::time_ms,
