@@ -171,7 +171,8 @@ void write_kitti_poses(const std::filesystem::path& path,
   out << std::setprecision(9);
   for (const auto& T : poses) {
     for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) out << (r || c ? " " : "") << T(r, c) + 0.0;  // + 0.0: -0 prints as 0
+      for (int c = 0; c < 4; ++c)
+        out << (r || c ? " " : "") << T(r, c) + 0.0;  // + 0.0: -0 prints as 0
     }
     out << '\n';
   }
