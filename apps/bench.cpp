@@ -36,6 +36,7 @@ struct BenchOptions {
   std::string csv;
   std::vector<std::string> success = {"0.05,1", "2,5"};
   SettingsOptions settings;
+  DepthOptions depth;
 };
 
 struct Perturbation {
@@ -286,7 +287,8 @@ void run(const BenchOptions& o) {
     const std::string key = path.lexically_normal().string();
     const std::lock_guard lock(cache_mutex);
     auto it = cloud_cache.find(key);
-    if (it == cloud_cache.end()) it = cloud_cache.emplace(key, load_cloud(key, role, false)).first;
+    if (it == cloud_cache.end())
+      it = cloud_cache.emplace(key, load_cloud(key, role, false, o.depth)).first;
     return it->second;  // std::map nodes never move
   };
   const auto run_task = [&](std::size_t task) {
@@ -447,6 +449,7 @@ void add_bench_command(CLI::App& app) {
                   "Success threshold TRANS_M,ROT_DEG (translation error and geodesic rotation "
                   "error both below); repeat the option for several [default: 0.05,1 and 2,5]")
       ->take_all();
+  add_depth_options(*cmd, o->depth);
   add_method_options(*cmd, o->settings, true);
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });

@@ -5,13 +5,110 @@
 #include <iostream>
 #include <string_view>
 #include <type_traits>
+#include <utility>
 
 #include "sgdicp/error.hpp"
+#include "sgdicp/settings.hpp"
 #include "sgdicp/transform_io.hpp"
 
 namespace sgdicp::cli {
+namespace {
 
-PointCloud load_cloud(const std::string& path, const std::string& role, bool verbose) {
+// The options of the depth settings, to name them in the messages of validate().
+constexpr std::pair<std::string_view, std::string_view> kDepthOptionOf[] = {
+    {"depth_units_per_m", "--depth-scale"},
+    {"max_depth_m", "--max-depth"},
+    {"min_depth_m", "--min-depth"},
+    {"pixel_stride", "--pixel-stride"}};
+
+void validate_depth_settings(const DepthImageSettings& settings) {
+  try {
+    settings.validate();
+  } catch (const InvalidSettingsError& e) {
+    std::string what = e.what();
+    for (const auto& [field, option] : kDepthOptionOf) {
+      if (what.starts_with(field)) what = std::string(option) + what.substr(field.size());
+    }
+    throw InvalidSettingsError(what);
+  }
+}
+
+// --intrinsics as a file or four numbers; without it, camera-intrinsics.txt beside the image
+// (the 7-Scenes layout), said on stderr.
+PinholeIntrinsics intrinsics_for(const std::string& image, const DepthOptions& o, bool verbose) {
+  std::error_code ec;
+  if (o.intrinsics.empty()) {
+    const std::filesystem::path beside =
+        std::filesystem::path(image).parent_path() / "camera-intrinsics.txt";
+    if (!std::filesystem::is_regular_file(beside, ec)) {
+      throw InvalidSettingsError(image +
+                                 ": a depth image needs --intrinsics FILE or fx,fy,cx,cy (and "
+                                 "there is no camera-intrinsics.txt beside it)");
+    }
+    if (verbose) std::cerr << "note: " << image << ": intrinsics from " << beside.string() << '\n';
+    return read_intrinsics(beside);
+  }
+  try {
+    if (std::filesystem::exists(o.intrinsics, ec)) return read_intrinsics(o.intrinsics);
+    return parse_intrinsics(o.intrinsics);
+  } catch (const FormatError& e) {
+    throw FormatError(std::string("--intrinsics: ") + e.what());
+  } catch (const InvalidSettingsError& e) {
+    throw InvalidSettingsError(std::string("--intrinsics: ") + e.what());
+  }
+}
+
+PointCloud load_depth_image(const std::string& path, bool verbose, const DepthOptions& o) {
+  validate_depth_settings(o.settings);
+  const PinholeIntrinsics K = intrinsics_for(path, o, verbose);
+  DepthImageReport report;
+  PointCloud cloud = read_depth_image(path, K, o.settings, &report);
+  if (verbose) {
+    std::cerr << "note: " << path << ": depth image " << report.width << " x " << report.height
+              << ", " << report.valid << " of " << report.pixels << " pixels back-projected ("
+              << report.invalid_zero << " without depth, " << report.invalid_range
+              << " out of range)\n";
+  }
+  return cloud;
+}
+
+}  // namespace
+
+void add_depth_options(CLI::App& app, DepthOptions& o) {
+  const DepthImageSettings d;
+  app.add_option("--intrinsics", o.intrinsics,
+                 "Pinhole intrinsics of .png depth images (pixels): a 3x3 K file or fx,fy,cx,cy "
+                 "[default: camera-intrinsics.txt beside the image]");
+  app.add_option("--depth-scale", o.settings.depth_units_per_m,
+                 "Depth units per metre of 16-bit .png depth images (TUM RGB-D: 5000) [default: " +
+                     format_number(d.depth_units_per_m) + "]");
+  app.add_option("--max-depth", o.settings.max_depth_m,
+                 "Depth image pixels deeper than this are dropped, m [default: " +
+                     format_number(d.max_depth_m) + "]");
+  app.add_option("--min-depth", o.settings.min_depth_m,
+                 "Depth image pixels shallower than this are dropped, m (depth 0 always is) "
+                 "[default: " +
+                     format_number(d.min_depth_m) + "]");
+  app.add_option("--pixel-stride", o.settings.pixel_stride,
+                 "Back-project every n-th pixel of depth images in x and y, pixels [default: " +
+                     std::to_string(d.pixel_stride) + "]");
+}
+
+bool is_depth_image(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".png";
+}
+
+PointCloud load_cloud(const std::string& path, const std::string& role, bool verbose,
+                      const DepthOptions& depth) {
+  if (is_depth_image(path)) {
+    PointCloud cloud = load_depth_image(path, verbose, depth);
+    if (cloud.empty()) {
+      throw InvalidInputError(path + ": the " + role + " depth image has no valid depth pixel");
+    }
+    return cloud;
+  }
   ReadResult read = read_point_cloud(path);
   if (read.non_finite_dropped > 0 && verbose) {
     std::cerr << "note: " << path << ": dropped " << read.non_finite_dropped

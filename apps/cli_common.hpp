@@ -6,14 +6,29 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "sgdicp/depth_image.hpp"
 #include "sgdicp/io.hpp"
 #include "sgdicp/registration.hpp"
 
 namespace sgdicp::cli {
 
-/// Reads a cloud; rejects an empty one with a message naming the file. Reports dropped points
-/// on stderr when verbose.
-PointCloud load_cloud(const std::string& path, const std::string& role, bool verbose);
+/// How a depth image (a .png path) becomes a cloud: --intrinsics, --depth-scale, --max-depth,
+/// --min-depth, --pixel-stride (docs/depth.md).
+struct DepthOptions {
+  std::string intrinsics;  ///< a 3x3 K file or "fx,fy,cx,cy"; empty: camera-intrinsics.txt beside
+  DepthImageSettings settings;
+};
+
+/// The depth-image options, with units and the library's defaults in their help.
+void add_depth_options(CLI::App& app, DepthOptions& o);
+
+/// Whether a path is read as a depth image (.png) rather than a point-cloud file.
+bool is_depth_image(const std::string& path);
+
+/// Reads a cloud, or back-projects a depth image (.png) with `depth`; rejects an empty one with
+/// a message naming the file. Reports dropped points on stderr when verbose.
+PointCloud load_cloud(const std::string& path, const std::string& role, bool verbose,
+                      const DepthOptions& depth = {});
 
 /// Parses a transform option (--init, --ground-truth): a file holding 12/16 numbers, or the
 /// 12/16 numbers inline. Errors name the option.

@@ -30,6 +30,7 @@ struct RegisterOptions {
   std::string trace;
   bool json = false;
   SettingsOptions settings;
+  DepthOptions depth;
 };
 
 void write_trace_csv(const std::string& path, const RegistrationResult& r) {
@@ -66,8 +67,8 @@ void run(const RegisterOptions& o) {
       o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
   std::optional<Eigen::Matrix4d> T_gt;
   if (!o.ground_truth.empty()) T_gt = parse_transform_option(o.ground_truth, "--ground-truth");
-  const PointCloud source = load_cloud(o.source, "source", !o.json);
-  const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json);
+  const PointCloud source = load_cloud(o.source, "source", !o.json, o.depth);
+  const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json, o.depth);
   const MethodRun run = run_method(method, source, reference_cloud, T_init, !o.trace.empty());
   const RegistrationResult& result = run.result;
   const double build_ms = run.prepare_ms;
@@ -145,7 +146,7 @@ void add_register_command(CLI::App& app) {
       "source points into the reference frame (p_ref = R p_src + t, metres).");
   cmd->add_option("SOURCE", o->source,
                   "Source cloud (the one that moves): .pcd .ply .bin .xyz "
-                  ".txt .csv .vtk .f32")
+                  ".txt .csv .vtk .f32, or a 16-bit .png depth image (see --intrinsics)")
       ->required();
   cmd->add_option("REFERENCE", o->reference, "Reference cloud (fixed), same formats")->required();
   cmd->add_option("--init", o->init,
@@ -165,6 +166,7 @@ void add_register_command(CLI::App& app) {
   cmd->add_option(
       "--trace", o->trace,
       "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");
+  add_depth_options(*cmd, o->depth);
   add_method_options(*cmd, o->settings, false);
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });

@@ -17,7 +17,9 @@ moves) are skipped: for them the data's answer is not the pose difference.
 
 Usage: python3 bench/make_sevenscenes_pairs.py [--data DIR] [--out DIR] [--offsets 1,3,5]
        [--pairs-per-offset 20]
-Needs numpy and Pillow (pip install numpy pillow).
+Needs numpy, and the sgd_icp package (pip install .) or Pillow (pip install pillow): with the
+package the frames are read by its depth-image reader (docs/depth.md), else by Pillow and numpy
+(the same points; tests/python/test_depth.py compares the two).
 """
 
 from __future__ import annotations
@@ -28,7 +30,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_DATA = REPO.parent / "shared" / "data" / "sevenscenes_redkitchen"
@@ -65,7 +66,20 @@ def repeated_frames(data: Path, count: int) -> set[int]:
 
 
 def back_project(data: Path, index: int, intrinsics) -> np.ndarray:
+    """The library's reader (sgd_icp.read_depth_image) when the package is installed, else numpy."""
+    try:
+        import sgd_icp
+    except ImportError:
+        return back_project_numpy(data, index, intrinsics)
+    points = sgd_icp.read_depth_image(data / frame_name(index, "depth.png"), intrinsics)
+    return np.ascontiguousarray(points, dtype="<f4")
+
+
+def back_project_numpy(data: Path, index: int, intrinsics) -> np.ndarray:
+    """Every nonzero depth pixel, row by row (the same points as sgd_icp.read_depth_image)."""
     fx, fy, cx, cy = intrinsics
+    from PIL import Image
+
     depth_mm = np.asarray(Image.open(data / frame_name(index, "depth.png")), dtype=np.float64)
     v, u = np.nonzero(depth_mm > 0)
     z = depth_mm[v, u] / 1000.0

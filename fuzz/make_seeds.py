@@ -8,6 +8,7 @@ Run from anywhere: python3 fuzz/make_seeds.py
 import math
 import pathlib
 import struct
+import zlib
 
 ROOT = pathlib.Path(__file__).resolve().parent / "corpus"
 
@@ -194,7 +195,31 @@ def pairs_seeds():
           "/abs/c.xyz d.vtk 1 0 0 0 0 1 0 0 0 0 1 0")
 
 
+def png(width, height, samples, bit_depth=16, colour_type=0, interlace=0):
+    """A PNG of row-major samples (big endian when 16-bit), filter type 0 on every row."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    per_pixel = len(samples) // (width * height)
+    fmt = ">%dH" if bit_depth == 16 else ">%dB"
+    row = width * per_pixel
+    raw = b"".join(b"\0" + struct.pack(fmt % row, *samples[v * row:(v + 1) * row]) for v in range(height))
+    ihdr = struct.pack(">IIBBBBB", width, height, bit_depth, colour_type, 0, 0, interlace)
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw, 9))
+            + chunk(b"IEND", b""))
+
+
+def depth_png_seeds():
+    # A tilted plane in millimetres with holes (0) and a 65535 sentinel, 16 x 12 pixels.
+    depth = [0 if (u * v) % 7 == 3 else 1200 + 15 * u + 9 * v for v in range(12) for u in range(16)]
+    depth[5] = 65535
+    write("fuzz_depth_png", "plane16.png", png(16, 12, depth))
+    write("fuzz_depth_png", "one16.png", png(1, 1, [1000]))
+    write("fuzz_depth_png", "eight_bit.png", png(4, 3, [100] * 12, bit_depth=8))
+    write("fuzz_depth_png", "rgb16.png", png(2, 2, [1000] * 12, colour_type=2))
+
+
 if __name__ == "__main__":
+    depth_png_seeds()
     pcd_seeds()
     ply_seeds()
     raw_seeds()

@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "io_files.hpp"
 #include "parse_number.hpp"
 #include "sgdicp/error.hpp"
 
@@ -212,9 +213,13 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
+}  // namespace
+
 std::string limit_text(std::uint64_t bytes) {
   return std::to_string(bytes) + " bytes = " + std::to_string(bytes >> 30) + " GiB";
 }
+
+namespace {
 
 // Only regular files: a device or FIFO has no size to check, and /dev/zero never ends.
 void check_regular_file(const fs::path& path, const std::string& name) {
@@ -232,6 +237,8 @@ void check_regular_file(const fs::path& path, const std::string& name) {
   throw IoError(name + ": " + kind +
                 " (only regular files are read, so that their size bounds what is read)");
 }
+
+}  // namespace
 
 std::vector<char> read_whole_file(const fs::path& path, const std::string& name) {
   check_regular_file(path, name);
@@ -266,6 +273,8 @@ std::vector<char> read_whole_file(const fs::path& path, const std::string& name)
   bytes.resize(used);
   return bytes;
 }
+
+namespace {
 
 void write_whole_file(const fs::path& path, const std::string& name, std::string_view data) {
   errno = 0;

@@ -1059,6 +1059,47 @@ def write_points(
     """
 
 
+# ---- depth images
+
+
+_Intrinsics = Union[tuple[float, float, float, float], npt.ArrayLike, _Path]
+"""(fx, fy, cx, cy) in pixels, a 3x3 camera matrix, or the path of a 3x3 K file."""
+
+
+def read_depth_image(
+    path: _Path,
+    intrinsics: _Intrinsics,
+    depth_scale: float = 1000.0,
+    max_depth: float = 10.0,
+    min_depth: float = 0.0,
+    pixel_stride: int = 1,
+) -> npt.NDArray[np.float32]:
+    """Reads a 16-bit greyscale PNG depth image and back-projects its valid pixels into an (N, 3)
+    float32 array, metres, in the camera frame (x right, y down, z forward), row by row
+    (docs/depth.md). intrinsics: (fx, fy, cx, cy) in pixels, a 3x3 camera matrix, or the path of
+    a 3x3 K file (the 7-Scenes camera-intrinsics.txt). depth_scale: stored units per metre (TUM
+    RGB-D: 5000). Pixels of depth 0, or outside [min_depth, max_depth] metres, are dropped;
+    pixel_stride takes every n-th pixel in x and y. Raises IoError (OSError), FormatError (not a
+    16-bit greyscale PNG, truncated, too many pixels) or InvalidSettingsError (ValueError).
+    """
+
+
+def depth_to_points(
+    depth: npt.ArrayLike,
+    intrinsics: _Intrinsics,
+    depth_scale: float = 1000.0,
+    max_depth: float = 10.0,
+    min_depth: float = 0.0,
+    pixel_stride: int = 1,
+) -> npt.NDArray[np.float32]:
+    """Back-projects a depth image held in memory, as read_depth_image: a 2-D array (rows, columns)
+    of uint16 stored units (depth_scale per metre) or of float32/float64 metres (depth_scale
+    unused; NaN and infinite depths are dropped too). Returns (N, 3) float32, metres, camera
+    frame (x right, y down, z forward). Raises InvalidInputError for another dtype or shape,
+    InvalidSettingsError for bad intrinsics or settings.
+    """
+
+
 # ---- metrics
 
 

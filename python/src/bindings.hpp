@@ -100,6 +100,11 @@ void bind_preprocessing(py::module_& m);
 /// Binds Odometry and FrameReport.
 void bind_odometry(py::module_& m);
 
+// ---- depth images (depth.cpp)
+
+/// Binds read_depth_image and depth_to_points.
+void bind_depth(py::module_& m);
+
 // ---- the module (module.cpp)
 
 /// Defines everything of sgd_icp._core in m.

@@ -621,6 +621,7 @@ void define_module(py::module_& m) {
   bind_reference_index(m);
   bind_results(m);
   bind_register_and_io(m);
+  bind_depth(m);
   bind_metrics(m);
   bind_odometry(m);
 }
