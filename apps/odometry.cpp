@@ -4,6 +4,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -29,12 +30,27 @@ struct OdometryOptions {
   std::string ground_truth_calib;
   std::string report;
   bool ground_truth_prefix = false;
-  double rate_hz = 10.0;
+  double rate_hz = 0.0;
   std::size_t max_frames = 0;
   bool quiet = false;
   std::map<std::string, std::string, std::less<>> odometry_values;
   SettingsOptions settings;
+  DepthOptions depth;
 };
+
+// --intrinsics as a K file or fx,fy,cx,cy; none: the layout's own (camera-intrinsics.txt).
+std::optional<PinholeIntrinsics> intrinsics_option(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  std::error_code ec;
+  try {
+    if (std::filesystem::exists(text, ec)) return read_intrinsics(text);
+    return parse_intrinsics(text);
+  } catch (const FormatError& e) {
+    throw FormatError(std::string("--intrinsics: ") + e.what());
+  } catch (const InvalidSettingsError& e) {
+    throw InvalidSettingsError(std::string("--intrinsics: ") + e.what());
+  }
+}
 
 OdometrySettings odometry_settings(const OdometryOptions& o) {
   OdometrySettings s;
@@ -139,10 +155,13 @@ void print_evaluation(const std::vector<Eigen::Matrix4d>& estimate,
 void run(const OdometryOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   const OdometrySettings settings = odometry_settings(o);
-  if (!(o.rate_hz > 0.0 && std::isfinite(o.rate_hz))) {
+  if (!(o.rate_hz >= 0.0 && std::isfinite(o.rate_hz))) {
     throw InvalidSettingsError("--rate " + format_number(o.rate_hz) + ": must be positive");
   }
-  const FrameSource source = open_frame_source(o.input);
+  const FrameSource source =
+      open_frame_source(o.input, intrinsics_option(o.depth.intrinsics), o.depth.settings);
+  const double rate_hz =
+      o.rate_hz > 0.0 ? o.rate_hz : (source.nominal_rate_hz > 0.0 ? source.nominal_rate_hz : 10.0);
   const std::size_t frames = o.max_frames ? std::min(o.max_frames, source.size()) : source.size();
   std::optional<std::vector<Eigen::Matrix4d>> truth;
   if (!o.ground_truth.empty()) truth = load_ground_truth(o, frames);
@@ -188,7 +207,7 @@ void run(const OdometryOptions& o) {
             static_cast<std::ptrdiff_t>(std::min(frames, source.timestamps_s.size())));
     if (times.size() != frames) {
       times.clear();
-      for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / o.rate_hz);
+      for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
     }
     write_tum_trajectory(o.tum, odometry.poses(), times);
   }
@@ -228,8 +247,9 @@ void add_odometry_command(CLI::App& app) {
       "4).");
   cmd->add_option("INPUT", o->input,
                   "Folder of frames, sorted by name: point clouds of one format (.pcd .ply .bin "
-                  ".xyz .txt .csv .vtk .f32), or a KITTI sequence folder (velodyne/*.bin, "
-                  "times.txt)")
+                  ".xyz .txt .csv .vtk .f32), a KITTI sequence folder (velodyne/*.bin, "
+                  "times.txt), or a 7-Scenes folder (frame-NNNNNN.depth.png, "
+                  "camera-intrinsics.txt)")
       ->required();
   cmd->add_option("--poses-out", o->poses_out,
                   "Write the trajectory here: one line per frame, the 3x4 row-major pose "
@@ -239,7 +259,8 @@ void add_odometry_command(CLI::App& app) {
                   "Also write the trajectory in the TUM format (timestamp tx ty tz qx qy qz qw), "
                   "timestamps from the source when known, else frame / --rate");
   cmd->add_option("--rate", o->rate_hz,
-                  "Frame rate for TUM timestamps when the source has none, Hz [default: 10]");
+                  "Frame rate for TUM timestamps when the source has none, Hz [default: 0 = the "
+                  "layout's: 7-Scenes 30, else 10]");
   cmd->add_option("--ground-truth", o->ground_truth,
                   "Ground-truth poses, one per frame: a KITTI poses file (12 numbers per line), a "
                   "TUM file (8 numbers per line) or a 7-Scenes folder (frame-*.pose.txt); prints "
@@ -269,6 +290,7 @@ void add_odometry_command(CLI::App& app) {
                       " (methods of `sgdicp register`) "
                       "[default: sgd]");
   add_settings_options(*cmd, o->settings);
+  add_depth_options(*cmd, o->depth);
   cmd->callback([o] { run(*o); });
 }
 

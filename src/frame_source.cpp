@@ -48,18 +48,44 @@ std::vector<double> kitti_timestamps(const std::filesystem::path& times,
   return out;
 }
 
+// The frame-*.depth.png files of a 7-Scenes sequence folder, sorted; empty when there are none.
+std::vector<std::filesystem::path> sevenscenes_frames(const std::filesystem::path& folder) {
+  std::vector<std::filesystem::path> out;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.starts_with("frame-") && name.ends_with(".depth.png")) out.push_back(entry.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 }  // namespace
 
 PointCloud FrameSource::read(std::size_t i) const {
+  if (intrinsics) return read_depth_image(frames.at(i), *intrinsics, depth);
   return read_point_cloud(frames.at(i)).cloud;
 }
 
-FrameSource open_frame_source(const std::filesystem::path& input) {
+FrameSource open_frame_source(const std::filesystem::path& input,
+                              const std::optional<PinholeIntrinsics>& intrinsics,
+                              const DepthImageSettings& depth) {
   std::error_code ec;
   if (!std::filesystem::is_directory(input, ec)) {
     throw IoError(input.string() + ": not a folder (odometry reads a folder of frames)");
   }
   FrameSource source;
+  source.frames = sevenscenes_frames(input);
+  if (!source.frames.empty()) {
+    source.layout = "7scenes";
+    source.folder = input;
+    source.nominal_rate_hz = 30.0;
+    depth.validate();
+    source.depth = depth;
+    source.intrinsics = intrinsics ? *intrinsics : read_intrinsics(input / "camera-intrinsics.txt");
+    source.intrinsics->validate();
+    return source;
+  }
   source.layout = "clouds";
   source.folder = input;
   if (std::filesystem::is_directory(input / "velodyne", ec)) {

@@ -223,11 +223,23 @@ Eigen::Matrix4d Odometry::skip_frame(const std::string& message) {
   report.failed = true;
   report.message = message;
   report.T_first_frame = predicted();
+  previous_points_.clear();
   return finish(report, PointCloud{}, now_ms());
 }
 
 Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   const double started = now_ms();
+  if (!poses_.empty() && !frame.empty() && frame.points == previous_points_) {
+    FrameReport report;
+    report.repeated = report.converged = true;
+    report.message = "repeated frame (identical to the previous one): the previous pose";
+    report.T_first_frame = poses_.back();
+    const Eigen::Matrix4d motion = last_motion_;
+    const Eigen::Matrix4d T = finish(report, PointCloud{}, started);
+    last_motion_ = motion;  // the motion goes on; the frame says nothing about it
+    return T;
+  }
+  previous_points_ = frame.points;
   const PointCloud cropped = crop_range(frame, settings_.min_range_m, settings_.max_range_m);
   if (!map_ && !cropped.empty()) start(cropped);
   FrameReport report;

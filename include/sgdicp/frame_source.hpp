@@ -3,13 +3,18 @@
 // frames' timestamps when the layout gives them. Layouts:
 //   - a folder of point-cloud files of one readable format (io.hpp), in name order;
 //   - a KITTI sequence folder: its velodyne/ subfolder of .bin scans, and its times.txt (one
-//     timestamp per line, line k for scan 0000k) when present.
-// Depth-image layouts (7-Scenes, TUM RGB-D) plug in here as more layouts.
+//     timestamp per line, line k for scan 0000k) when present;
+//   - a 7-Scenes sequence folder: frame-NNNNNN.depth.png depth images (depth_image.hpp) with the
+//     folder's camera-intrinsics.txt (or the intrinsics given), 30 Hz.
+// The TUM RGB-D layout (depth.txt + depth/) is a layout still to add.
 #include <cstddef>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include <optional>
+
+#include "sgdicp/depth_image.hpp"
 #include "sgdicp/point_cloud.hpp"
 
 namespace sgdicp {
@@ -19,6 +24,10 @@ struct FrameSource {
   std::string layout;            ///< "clouds" or "kitti"
   std::vector<std::filesystem::path> frames;
   std::vector<double> timestamps_s;  ///< one per frame, or empty when unknown
+  double nominal_rate_hz = 0.0;      ///< the layout's frame rate, 0 when unknown
+  /// Depth-image frames: their intrinsics and back-projection settings.
+  std::optional<PinholeIntrinsics> intrinsics;
+  DepthImageSettings depth;
 
   [[nodiscard]] std::size_t size() const noexcept { return frames.size(); }
   /// Frame i in its sensor frame. Throws IoError or FormatError (naming the file).
@@ -27,6 +36,11 @@ struct FrameSource {
 
 /// The frames of a folder. Throws IoError for a missing folder, FormatError for a folder with no
 /// readable frame or with frames of several formats (naming two of them).
-[[nodiscard]] FrameSource open_frame_source(const std::filesystem::path& input);
+/// Depth images use `intrinsics` when given, else the folder's camera-intrinsics.txt (IoError /
+/// FormatError naming it when missing or malformed), with `depth`.
+[[nodiscard]] FrameSource open_frame_source(
+    const std::filesystem::path& input,
+    const std::optional<PinholeIntrinsics>& intrinsics = std::nullopt,
+    const DepthImageSettings& depth = {});
 
 }  // namespace sgdicp

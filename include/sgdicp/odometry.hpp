@@ -107,7 +107,11 @@ struct FrameReport {
   Eigen::Matrix4d T_first_frame = Eigen::Matrix4d::Identity();
   bool failed = false;     ///< the pose is the prediction, not a registration (see message)
   bool converged = false;  ///< the registration's convergence test passed
-  std::string message;     ///< why it failed, or the registration's stop message
+  /// The frame is identical to the previous one (a sensor delivering a frame twice, as 59 of the
+  /// 600 7-Scenes frames): it gets the previous pose and the motion model is kept, since the
+  /// data's answer (no motion) would stop the prediction.
+  bool repeated = false;
+  std::string message;  ///< why it failed, or the registration's stop message
   std::size_t iterations = 0;
   std::size_t source_points = 0;  ///< frame points registered (after cropping and thinning)
   std::size_t map_points = 0;     ///< map points it was registered to
@@ -154,6 +158,7 @@ class Odometry {
   std::optional<VoxelMap> map_;
   std::optional<AdaptiveThreshold> threshold_;
   Eigen::Matrix4d last_motion_ = Eigen::Matrix4d::Identity();  ///< T_{k-2}^-1 T_{k-1}
+  std::vector<Eigen::Vector3f> previous_points_;  ///< of the last frame, to spot a repeat
   std::vector<Eigen::Matrix4d> poses_;
   std::vector<FrameReport> reports_;
 };
