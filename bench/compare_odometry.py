@@ -3,8 +3,13 @@
 frame, and the agreement of the two trajectories.
 
     python bench/compare_odometry.py ../shared/data/kitti_odometry_seq00 [--methods sgd,icp-plane]
+    python bench/compare_odometry.py ../shared/data/sevenscenes_redkitchen --max-frames 100
 
-The frames are those of a KITTI sequence folder (velodyne/*.bin). The reference trajectory is the
+The frames are those of a KITTI sequence folder (velodyne/*.bin) or of a 7-Scenes folder
+(frame-*.depth.png back-projected with camera-intrinsics.txt; reference: its frame-*.pose.txt,
+re-orthonormalised). For the Kinect KISS-ICP gets max range 5 m (voxel 5 cm by its rule),
+initial threshold 0.1 m and min motion 0.005 m (its LiDAR defaults, 2 m and 0.1 m, are larger
+than the whole motion). The reference trajectory is the
 maintainers' ICP pseudo ground truth of reference_relative_poses_icp.txt when present (the
 official poses are 0.15 m per frame off for frames 0-10, PROVENANCE.md), else poses_*.txt moved
 into the scanner frame with calib.txt's Tr. KISS-ICP is run with its own defaults (max range
@@ -25,8 +30,19 @@ import numpy as np
 import sgd_icp
 
 
+def orthonormal(T: np.ndarray) -> np.ndarray:
+    U, _, Vt = np.linalg.svd(T[:3, :3])
+    out = T.copy()
+    out[:3, :3] = U @ np.diag([1, 1, np.linalg.det(U @ Vt)]) @ Vt
+    return out
+
+
 def read_reference(folder: Path, frames: int) -> tuple[np.ndarray, str]:
     """Poses T_0_k of the scanner (frame 0 at the identity) and where they came from."""
+    poses7 = sorted(folder.glob("frame-*.pose.txt"))
+    if poses7:
+        P = np.array([orthonormal(np.loadtxt(f)) for f in poses7[:frames]])
+        return np.linalg.inv(P[0]) @ P, "7-Scenes pose files (dense tracking)"
     ref = folder / "reference_relative_poses_icp.txt"
     if ref.is_file():
         pairs = {}
@@ -79,8 +95,8 @@ def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, float]:
     }
 
 
-def run_ours(frames: list[np.ndarray], method: str) -> tuple[np.ndarray, list[float], float]:
-    odometry = sgd_icp.Odometry(method=method)
+def run_ours(frames: list[np.ndarray], method: str, kinect: bool) -> tuple[np.ndarray, list[float], float]:
+    odometry = sgd_icp.Odometry(method=method, **({"max_range": 5.0} if kinect else {}))
     times = []
     for f in frames:
         start = time.perf_counter()
@@ -90,13 +106,18 @@ def run_ours(frames: list[np.ndarray], method: str) -> tuple[np.ndarray, list[fl
     return odometry.poses, times, odometry.voxel_size
 
 
-def run_kiss(frames: list[np.ndarray], voxel_size: float | None) -> tuple[np.ndarray, list[float]]:
+def run_kiss(frames: list[np.ndarray], voxel_size: float | None, kinect: bool) -> tuple[np.ndarray, list[float]]:
     from kiss_icp.config import load_config
     from kiss_icp.kiss_icp import KissICP
 
     config = load_config(None)
     config.data.deskew = False
     config.registration.max_num_threads = 1
+    if kinect:
+        config.data.max_range = 5.0
+        config.mapping.voxel_size = 0.05
+        config.adaptive_threshold.initial_threshold = 0.1
+        config.adaptive_threshold.min_motion_th = 0.005
     if voxel_size is not None:
         config.mapping.voxel_size = voxel_size
     odometry = KissICP(config=config)
@@ -117,21 +138,25 @@ def main() -> None:
                         help="sgd-icp methods, comma-separated [default: sgd,sgd-plane,icp-plane]")
     parser.add_argument("--max-frames", type=int, default=0)
     args = parser.parse_args()
-    files = sorted((args.folder / "velodyne").glob("*.bin"))
+    depth = sorted(args.folder.glob("frame-*.depth.png"))
+    kinect = bool(depth)
+    files = depth or sorted((args.folder / "velodyne").glob("*.bin"))
     if args.max_frames:
         files = files[: args.max_frames]
-    frames = [sgd_icp.read_points(f) for f in files]
+    K = args.folder / "camera-intrinsics.txt"
+    frames = [sgd_icp.read_depth_image(f, K) if kinect else sgd_icp.read_points(f) for f in files]
     ref, ref_name = read_reference(args.folder, len(frames))
     print(f"{len(frames)} frames of {args.folder}; reference: {ref_name}")
     rows, trajectories = [], {}
     voxel = None
     for method in args.methods.split(","):
-        poses, times, voxel = run_ours(frames, method)
+        poses, times, voxel = run_ours(frames, method, kinect)
         trajectories[f"sgd-icp {method}"] = poses
         rows.append((f"sgd-icp {method} (voxel {voxel:.2f} m)", metrics(poses, ref), times))
     for v in (None, voxel):
-        poses, times = run_kiss(frames, v)
-        name = f"KISS-ICP (voxel {'1.00' if v is None else f'{v:.2f}'} m)"
+        poses, times = run_kiss(frames, v, kinect)
+        default = 0.05 if kinect else 1.0
+        name = f"KISS-ICP (voxel {default if v is None else v:.2f} m)"
         trajectories[name] = poses
         rows.append((name, metrics(poses, ref), times))
     print("| run | RPE t RMSE (m) | RPE r RMSE (deg) | ATE RMSE (m) | end drift (m / deg) "

@@ -26,7 +26,21 @@ finish() {
 }
 [ -x "$BIN" ] || {
   fail "SGDICP_BIN ('${BIN}') is not an executable"
-  finish
+  SEVEN="$SHARED/sevenscenes_redkitchen"
+if [ -f "$SEVEN/camera-intrinsics.txt" ]; then
+  run odometry "$SEVEN" --max-frames 10 --max-range 5 --poses-out "$tmp/s.txt" --tum "$tmp/s.tum" \
+    --ground-truth "$SEVEN" --ground-truth-prefix
+  if [ "$rc" -eq 0 ] && grep -q 'layout: 7scenes' "$tmp/out" && grep -q 'frames: 10, failed: 0' "$tmp/out" &&
+    grep -q 'ATE (evo_ape' "$tmp/out" && [ "$(grep -c . "$tmp/s.txt")" -eq 10 ] &&
+    awk '!/^#/ { n++; if (n == 2 && $1 > 0.033 && $1 < 0.034) ok = 1 } END { exit !ok }' "$tmp/s.tum"; then
+    pass "odometry on 7-Scenes depth frames: 10 poses, TUM timestamps at 30 Hz, errors printed"
+  else
+    fail "odometry on 7-Scenes (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+else
+  echo "SKIP: 7-Scenes frames (no $SEVEN)"
+fi
+finish
 }
 tmp="$(mktemp -d "${TMPDIR:-/tmp}/sgdicp_odometry_test.XXXXXX")" || exit 1
 trap 'rm -rf "$tmp"' EXIT
@@ -125,5 +139,19 @@ if [ -d "$KITTI/velodyne" ]; then
     'ground-truth-prefix' odometry "$KITTI" --poses-out "$tmp/k.txt" --ground-truth "$KITTI/poses_00.txt"
 else
   echo "SKIP: KITTI scans (no $KITTI)"
+fi
+SEVEN="$SHARED/sevenscenes_redkitchen"
+if [ -f "$SEVEN/camera-intrinsics.txt" ]; then
+  run odometry "$SEVEN" --max-frames 10 --max-range 5 --poses-out "$tmp/s.txt" --tum "$tmp/s.tum" \
+    --ground-truth "$SEVEN" --ground-truth-prefix
+  if [ "$rc" -eq 0 ] && grep -q 'layout: 7scenes' "$tmp/out" && grep -q 'frames: 10, failed: 0' "$tmp/out" &&
+    grep -q 'ATE (evo_ape' "$tmp/out" && [ "$(grep -c . "$tmp/s.txt")" -eq 10 ] &&
+    awk '!/^#/ { n++; if (n == 2 && $1 > 0.033 && $1 < 0.034) ok = 1 } END { exit !ok }' "$tmp/s.tum"; then
+    pass "odometry on 7-Scenes depth frames: 10 poses, TUM timestamps at 30 Hz, errors printed"
+  else
+    fail "odometry on 7-Scenes (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+else
+  echo "SKIP: 7-Scenes frames (no $SEVEN)"
 fi
 finish
