@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("sgdicp ") + sgdicp::kVersion);
   sgdicp::cli::add_register_command(app);
   sgdicp::cli::add_bench_command(app);
+  sgdicp::cli::add_odometry_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1168,3 +1168,95 @@ def rotation_error_euler_sum(T_est: _Transform, T_gt: _Transform) -> float:
     """The paper's rotation error: |d roll| + |d pitch| + |d yaw| of two (4, 4) transforms, each
     wrapped to (-pi, pi], radians.
     """
+
+
+class FrameReport:
+    """What happened to one frame of an Odometry."""
+
+    @property
+    def index(self) -> int:
+        """Frame number, from 0."""
+    @property
+    def T_first_frame(self) -> npt.NDArray[np.float64]:
+        """(4, 4) float64 pose of the frame in the first frame's coordinates."""
+    @property
+    def failed(self) -> bool:
+        """True if the pose is the constant-velocity prediction, not a registration (see message).
+        """
+    @property
+    def converged(self) -> bool:
+        """True if the registration's convergence test passed."""
+    @property
+    def message(self) -> str:
+        """Why the frame failed, or the registration's stop message."""
+    @property
+    def iterations(self) -> int:
+        """Iterations of the registration."""
+    @property
+    def source_points(self) -> int:
+        """Frame points registered (after cropping and thinning)."""
+    @property
+    def map_points(self) -> int:
+        """Map points registered to."""
+    @property
+    def inlier_ratio(self) -> float:
+        """Inlier ratio of the registration."""
+    @property
+    def inlier_rmse_m(self) -> float:
+        """Inlier RMSE of the registration, metres."""
+    @property
+    def threshold_m(self) -> float:
+        """d_max given to the registration (3 sigma of the adaptive threshold), metres; 0 when
+        max_distance= fixes it.
+        """
+    @property
+    def index_build_ms(self) -> float:
+        """KD-tree build over the map (plus normals or covariances), milliseconds."""
+    @property
+    def time_ms(self) -> float:
+        """The whole frame (thinning, index, registration, map update), milliseconds."""
+
+
+class Odometry:
+    """Scan-to-map odometry: frames (points in their sensor frame) registered one at a time to a
+    local voxel map, from a constant-velocity prediction, with an adaptive correspondence
+    threshold (docs/odometry.md).
+    """
+
+    def __init__(self, method: str = "sgd", **settings: Any) -> None:
+        """method: the registration step, a --method of the CLI (sgd, sgd-plane, sgd-gicp, icp,
+        icp-plane or gicp). Keywords: the odometry settings of `sgdicp odometry` (max_range (100
+        m), min_range (0 m), voxel_size (0 m), max_points_per_voxel (20), initial_threshold (0
+        m), min_motion (0 m), max_translation_per_frame (5 m), max_rotation_per_frame (45 deg); 0
+        = derived from the first frame, docs/odometry.md) and the keywords of register() for the
+        method. max_distance= fixes d_max and turns the adaptive threshold off. Raises TypeError
+        for an unknown keyword, InvalidSettingsError for an invalid value.
+        """
+    def register_frame(self, points: _Points) -> npt.NDArray[np.float64]:
+        """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),
+        and returns its (4, 4) pose in the first frame's coordinates (the first frame: the
+        identity). A frame that fails (see last_report) gets the predicted pose.
+        """
+    def skip_frame(self, message: str) -> npt.NDArray[np.float64]:
+        """Records a frame that could not be read: it gets the predicted pose and a failed report
+        with `message`.
+        """
+    @property
+    def poses(self) -> npt.NDArray[np.float64]:
+        """(K, 4, 4) float64 poses of the frames so far, in the first frame's coordinates."""
+    @property
+    def reports(self) -> list[FrameReport]:
+        """A FrameReport per frame so far."""
+    @property
+    def last_report(self) -> FrameReport | None:
+        """The FrameReport of the last frame, or None before the first."""
+    @property
+    def voxel_size(self) -> float:
+        """The map's voxel size in use, metres (0 before the first frame when derived)."""
+    @property
+    def map_points(self) -> int:
+        """Points in the local map."""
+    @property
+    def method(self) -> str:
+        """The registration method's name."""
+    def __len__(self) -> int: ...

@@ -100,6 +100,11 @@ void bind_settings(py::module_& m);
 /// Binds voxel_downsample, random_downsample, estimate_normals and estimate_covariances.
 void bind_preprocessing(py::module_& m);
 
+// ---- odometry (odometry.cpp)
+
+/// Binds Odometry and FrameReport.
+void bind_odometry(py::module_& m);
+
 // ---- depth images (depth.cpp)
 
 /// Binds read_depth_image and depth_to_points.

@@ -704,6 +704,7 @@ void define_module(py::module_& m) {
   bind_register_and_io(m);
   bind_depth(m);
   bind_metrics(m);
+  bind_odometry(m);
 }
 
 }  // namespace sgdicp::python

@@ -1,0 +1,297 @@
+// `sgdicp odometry INPUT --poses-out FILE`: scan-to-map odometry over a folder of frames, the
+// trajectory in the KITTI (and TUM) format, and its errors against a ground truth.
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "cli_common.hpp"
+#include "cli_settings.hpp"
+#include "sgdicp/error.hpp"
+#include "sgdicp/frame_source.hpp"
+#include "sgdicp/odometry.hpp"
+#include "sgdicp/trajectory_io.hpp"
+#include "sgdicp/trajectory_metrics.hpp"
+
+namespace sgdicp::cli {
+namespace {
+
+struct OdometryOptions {
+  std::string input;
+  std::string poses_out;
+  std::string tum;
+  std::string ground_truth;
+  std::string ground_truth_calib;
+  std::string report;
+  bool ground_truth_prefix = false;
+  double rate_hz = 0.0;
+  std::size_t max_frames = 0;
+  bool quiet = false;
+  std::map<std::string, std::string, std::less<>> odometry_values;
+  SettingsOptions settings;
+  DepthOptions depth;
+};
+
+// --intrinsics as a K file or fx,fy,cx,cy; none: the layout's own (camera-intrinsics.txt).
+std::optional<PinholeIntrinsics> intrinsics_option(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  std::error_code ec;
+  try {
+    if (std::filesystem::exists(text, ec)) return read_intrinsics(text);
+    return parse_intrinsics(text);
+  } catch (const FormatError& e) {
+    throw FormatError(std::string("--intrinsics: ") + e.what());
+  } catch (const InvalidSettingsError& e) {
+    throw InvalidSettingsError(std::string("--intrinsics: ") + e.what());
+  }
+}
+
+OdometrySettings odometry_settings(const OdometryOptions& o) {
+  OdometrySettings s;
+  for (const auto& [name, text] : o.odometry_values) {
+    const OdometrySetting& setting = *find_odometry_setting(name);
+    double v = 0.0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size()) {
+      throw InvalidSettingsError(setting.spelled(SettingNames::cli) + " " + text +
+                                 ": not a number");
+    }
+    setting.set(s, v);
+    if (setting.integer && v != std::floor(v)) {
+      throw InvalidSettingsError(setting.spelled(SettingNames::cli) + " " + text +
+                                 ": not an integer");
+    }
+  }
+  // A d_max given on the command line is used as is, every frame.
+  s.adaptive_threshold = !o.settings.values.contains("max-distance");
+  s.step_within_threshold = !o.settings.values.contains("learning-rate");
+  s.validate(SettingNames::cli);
+  return s;
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+void write_report_csv(const std::string& path, const FrameSource& source,
+                      const std::vector<FrameReport>& reports) {
+  std::ofstream out(path);
+  if (!out) throw IoError(path + ": cannot open for writing");
+  out << "frame,file,failed,converged,iterations,source_points,map_points,inlier_ratio,"
+         "inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n"
+      << std::setprecision(6);
+  for (const auto& r : reports) {
+    std::string message = r.message;
+    std::replace(message.begin(), message.end(), '"', '\'');
+    out << r.index << ',' << source.frames[r.index].filename().string() << ',' << r.failed << ','
+        << r.converged << ',' << r.iterations << ',' << r.source_points << ',' << r.map_points
+        << ',' << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ','
+        << r.index_build_ms << ',' << r.time_ms << ",\"" << message << "\"\n";
+  }
+  if (!out) throw IoError(path + ": write error");
+}
+
+// The ground truth as poses of the frames, relative to the first: checked against the frame
+// count, moved into the sensor frame by a KITTI calibration when given.
+std::vector<Eigen::Matrix4d> load_ground_truth(const OdometryOptions& o, std::size_t frames) {
+  Trajectory truth = read_trajectory(o.ground_truth);
+  if (truth.poses.size() != frames) {
+    if (truth.poses.size() < frames || !o.ground_truth_prefix) {
+      throw InvalidInputError("--ground-truth " + o.ground_truth + ": " +
+                              std::to_string(truth.poses.size()) + " poses for " +
+                              std::to_string(frames) + " frames" +
+                              (truth.poses.size() > frames
+                                   ? " (add --ground-truth-prefix to compare with its first poses)"
+                                   : ""));
+    }
+    truth.poses.resize(frames);
+  }
+  if (!o.ground_truth_calib.empty()) {
+    const Eigen::Matrix4d Tr = read_kitti_calibration_tr(o.ground_truth_calib);
+    const Eigen::Matrix4d Tr_inv = Tr.inverse();
+    for (auto& G : truth.poses) G = Tr_inv * G * Tr;  // camera poses -> sensor poses
+  }
+  return relative_to_first(truth.poses);
+}
+
+void print_evaluation(const std::vector<Eigen::Matrix4d>& estimate,
+                      const std::vector<Eigen::Matrix4d>& truth) {
+  std::cout << std::setprecision(4);
+  const double length = path_length_m(truth);
+  std::cout << "ground truth: " << truth.size() << " poses, path " << length << " m\n";
+  if (truth.size() >= 2) {
+    const RelativePoseErrors rpe = relative_pose_errors(estimate, truth, 1);
+    std::cout << "RPE per frame (evo_rpe, delta 1 frame): translation RMSE " << rpe.translation.rmse
+              << " m, mean " << rpe.translation.mean << ", median " << rpe.translation.median
+              << ", max " << rpe.translation.max << "; rotation RMSE " << rpe.rotation.rmse
+              << " deg, mean " << rpe.rotation.mean << ", median " << rpe.rotation.median
+              << ", max " << rpe.rotation.max << '\n';
+    if (const auto drift = kitti_drift(estimate, truth)) {
+      std::cout << "KITTI drift (devkit, 100..800 m segments, " << drift->segments
+                << " segments): translation " << drift->translation_percent << " %, rotation "
+                << drift->rotation_deg_per_m << " deg/m\n";
+    } else {
+      std::cout << "KITTI drift: not computed (the path, " << length
+                << " m, is shorter than the devkit's shortest segment, 100 m)\n";
+    }
+  }
+  const AbsoluteTrajectoryError ate = absolute_trajectory_error(estimate, truth);
+  std::cout << "ATE (evo_ape, rigid alignment, no scale): RMSE " << ate.error.rmse << " m, mean "
+            << ate.error.mean << ", median " << ate.error.median << ", max " << ate.error.max
+            << '\n';
+  const EndDrift end = end_drift(estimate, truth);
+  std::cout << "end drift (first to last frame): " << end.translation_m << " m ("
+            << end.translation_percent << " % of the path), " << end.rotation_deg << " deg\n";
+}
+
+void run(const OdometryOptions& o) {
+  const MethodSpec method = make_method(o.settings.method, o.settings);
+  const OdometrySettings settings = odometry_settings(o);
+  if (!(o.rate_hz >= 0.0 && std::isfinite(o.rate_hz))) {
+    throw InvalidSettingsError("--rate " + format_number(o.rate_hz) + ": must be positive");
+  }
+  const FrameSource source =
+      open_frame_source(o.input, intrinsics_option(o.depth.intrinsics), o.depth.settings);
+  const double rate_hz =
+      o.rate_hz > 0.0 ? o.rate_hz : (source.nominal_rate_hz > 0.0 ? source.nominal_rate_hz : 10.0);
+  const std::size_t frames = o.max_frames ? std::min(o.max_frames, source.size()) : source.size();
+  std::optional<std::vector<Eigen::Matrix4d>> truth;
+  if (!o.ground_truth.empty()) truth = load_ground_truth(o, frames);
+
+  Odometry odometry(settings, method.name, method.sgd, method.batch);
+  const auto start = std::chrono::steady_clock::now();
+  auto last_progress = start;
+  std::size_t unreadable = 0;
+  for (std::size_t i = 0; i < frames; ++i) {
+    try {
+      odometry.register_frame(source.read(i));
+    } catch (const IoError& e) {
+      odometry.skip_frame(std::string("unreadable: ") + e.what());
+      ++unreadable;
+    } catch (const FormatError& e) {
+      odometry.skip_frame(std::string("unreadable: ") + e.what());
+      ++unreadable;
+    }
+    const FrameReport& r = odometry.reports().back();
+    if (r.failed && !o.quiet) {
+      std::cerr << "frame " << i << " (" << source.frames[i].filename().string()
+                << "): FAILED, predicted pose used: " << r.message << '\n';
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (!o.quiet && (now - last_progress > std::chrono::seconds(1) || i + 1 == frames)) {
+      const double s = std::chrono::duration<double>(now - start).count();
+      std::cerr << "\r" << i + 1 << "/" << frames << " frames, " << std::fixed
+                << std::setprecision(1) << static_cast<double>(i + 1) / s << " frames/s"
+                << std::defaultfloat << (i + 1 == frames ? "\n" : "") << std::flush;
+      last_progress = now;
+    }
+  }
+  if (unreadable == frames) {
+    throw FormatError(
+        o.input + ": no frame could be read (first: " + odometry.reports().front().message + ")");
+  }
+
+  write_kitti_poses(o.poses_out, odometry.poses());
+  if (!o.tum.empty()) {
+    std::vector<double> times(
+        source.timestamps_s.begin(),
+        source.timestamps_s.begin() +
+            static_cast<std::ptrdiff_t>(std::min(frames, source.timestamps_s.size())));
+    if (times.size() != frames) {
+      times.clear();
+      for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
+    }
+    write_tum_trajectory(o.tum, odometry.poses(), times);
+  }
+  if (!o.report.empty()) write_report_csv(o.report, source, odometry.reports());
+
+  std::vector<double> times_ms;
+  std::size_t failed = 0;
+  for (const auto& r : odometry.reports()) {
+    times_ms.push_back(r.time_ms);
+    failed += r.failed ? 1 : 0;
+  }
+  const double total_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::cout << std::setprecision(4) << "method: " << method.name << ", layout: " << source.layout
+            << ", voxel " << odometry.voxel_size_m() << " m\n"
+            << "frames: " << frames << ", failed: " << failed << " (unreadable: " << unreadable
+            << "), time per frame: median " << median_of(times_ms) << " ms, max "
+            << *std::max_element(times_ms.begin(), times_ms.end()) << " ms, "
+            << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
+            << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
+            << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
+            << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum) << '\n';
+  if (truth) print_evaluation(odometry.poses(), *truth);
+}
+
+}  // namespace
+
+void add_odometry_command(CLI::App& app) {
+  auto o = std::make_shared<OdometryOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "odometry",
+      "Scan-to-map odometry over a folder of frames: each frame registered to a local voxel map "
+      "of the frames before it, from a constant-velocity prediction. Writes the pose of every "
+      "frame in the first frame's coordinates (docs/odometry.md). The registration options below "
+      "apply to each frame; giving --max-distance fixes d_max (no adaptive threshold), giving "
+      "--learning-rate keeps it uncapped (Adam and RMSProp steps are otherwise capped at d_max / "
+      "4).");
+  cmd->add_option("INPUT", o->input,
+                  "Folder of frames, sorted by name: point clouds of one format (.pcd .ply .bin "
+                  ".xyz .txt .csv .vtk .f32), a KITTI sequence folder (velodyne/*.bin, "
+                  "times.txt), or a 7-Scenes folder (frame-NNNNNN.depth.png, "
+                  "camera-intrinsics.txt)")
+      ->required();
+  cmd->add_option("--poses-out", o->poses_out,
+                  "Write the trajectory here: one line per frame, the 3x4 row-major pose "
+                  "T_first_frame (KITTI format; the first line is the identity)")
+      ->required();
+  cmd->add_option("--tum", o->tum,
+                  "Also write the trajectory in the TUM format (timestamp tx ty tz qx qy qz qw), "
+                  "timestamps from the source when known, else frame / --rate");
+  cmd->add_option("--rate", o->rate_hz,
+                  "Frame rate for TUM timestamps when the source has none, Hz [default: 0 = the "
+                  "layout's: 7-Scenes 30, else 10]");
+  cmd->add_option("--ground-truth", o->ground_truth,
+                  "Ground-truth poses, one per frame: a KITTI poses file (12 numbers per line), a "
+                  "TUM file (8 numbers per line) or a 7-Scenes folder (frame-*.pose.txt); prints "
+                  "RPE, KITTI drift, ATE and end drift");
+  cmd->add_flag("--ground-truth-prefix", o->ground_truth_prefix,
+                "Compare with the first poses of a longer ground truth (a KITTI poses file of the "
+                "whole sequence for its first frames)");
+  cmd->add_option("--ground-truth-calib", o->ground_truth_calib,
+                  "KITTI calib.txt: the ground truth is of the camera, moved to the scanner with "
+                  "its Tr (velodyne to camera)");
+  cmd->add_option("--report", o->report,
+                  "Write one CSV row per frame (failed, converged, iterations, points, inliers, "
+                  "threshold, times, message)");
+  cmd->add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
+  cmd->add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
+  for (const auto& s : odometry_settings_table()) {
+    const std::string name(s.name);
+    const double v = s.get(OdometrySettings{});
+    cmd->add_option_function<std::string>(
+           "--" + name, [o, name](const std::string& text) { o->odometry_values[name] = text; },
+           std::string(s.help) + ", " + (s.unit.empty() ? "unitless" : std::string(s.unit)) +
+               " in " + s.range.to_string() + " [default: " + format_number(v) + "]")
+        ->type_name(s.integer ? "UINT" : "FLOAT");
+  }
+  cmd->add_option("--method", o->settings.method,
+                  "Registration step: " + method_list(", ") +
+                      " (methods of `sgdicp register`) "
+                      "[default: sgd]");
+  add_settings_options(*cmd, o->settings);
+  add_depth_options(*cmd, o->depth);
+  cmd->callback([o] { run(*o); });
+}
+
+}  // namespace sgdicp::cli

@@ -1,0 +1,184 @@
+// sgd_icp.Odometry: the library's Odometry (odometry.hpp) fed one NumPy frame at a time, with the
+// keywords of the CLI's `sgdicp odometry` options (the odometry table, then the registration's).
+#include <string>
+
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "sgdicp/error.hpp"
+#include "sgdicp/odometry.hpp"
+
+namespace sgdicp::python {
+namespace {
+
+using namespace pybind11::literals;
+
+// The odometry keywords of `overrides` applied to the defaults; the others returned.
+OdometrySettings take_odometry_keywords(py::dict& overrides) {
+  OdometrySettings s;
+  py::list taken;
+  for (const auto& [key, value] : overrides) {
+    const std::string name = py::str(key);
+    if (name.find('-') != std::string::npos) continue;
+    const OdometrySetting* setting = find_odometry_setting(name);
+    if (!setting) continue;
+    const double v =
+        setting->integer
+            ? static_cast<double>(as_count(value, setting->spelled(SettingNames::python)))
+            : as_real(value, setting->spelled(SettingNames::python));
+    setting->set(s, v);
+    taken.append(key);
+  }
+  for (const auto& key : taken) overrides.attr("pop")(key);
+  s.adaptive_threshold = !overrides.contains("max_distance");
+  s.step_within_threshold = !overrides.contains("learning_rate");
+  s.validate(SettingNames::python);
+  return s;
+}
+
+Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
+  py::dict overrides(kwargs);
+  const OdometrySettings settings = take_odometry_keywords(overrides);
+  const Method& m = method_from_string(method);
+  if (m.cost && overrides.contains("cost")) {
+    throw InvalidSettingsError("method='" + std::string(m.name) +
+                               "' sets the cost; drop cost= (or use method='sgd' with cost=)");
+  }
+  SgdSettings sgd;
+  BatchSettings batch;
+  try {
+    if (m.solver == Solver::sgd) {
+      if (m.cost) sgd.cost = *m.cost;
+      sgd = with_overrides(sgd, overrides);
+    } else {
+      batch.cost = *m.cost;
+      batch = with_batch_overrides(batch, overrides, m.name);
+    }
+  } catch (const py::type_error& e) {
+    std::string names;
+    for (const auto& s : odometry_settings_table()) {
+      names += (names.empty() ? "" : ", ") + s.spelled(SettingNames::field);
+    }
+    throw py::type_error(std::string(e.what()) + "; the odometry keywords: " + names);
+  }
+  return Odometry(settings, m.name, sgd, batch);
+}
+
+py::array_t<double> stacked(const std::vector<Eigen::Matrix4d>& poses) {
+  py::array_t<double> out({static_cast<py::ssize_t>(poses.size()), py::ssize_t{4}, py::ssize_t{4}});
+  auto a = out.mutable_unchecked<3>();
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    for (py::ssize_t i = 0; i < 4; ++i) {
+      for (py::ssize_t j = 0; j < 4; ++j) {
+        a(static_cast<py::ssize_t>(k), i, j) = poses[k](i, j);
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+void bind_odometry(py::module_& m) {
+  py::class_<FrameReport>(m, "FrameReport", "What happened to one frame of an Odometry.")
+      .def_readonly("index", &FrameReport::index, "Frame number, from 0.")
+      .def_property_readonly(
+          "T_first_frame", [](const FrameReport& r) { return array_from_matrix(r.T_first_frame); },
+          "(4, 4) float64 pose of the frame in the first frame's coordinates.")
+      .def_readonly("failed", &FrameReport::failed,
+                    "True if the pose is the constant-velocity prediction, not a registration "
+                    "(see message).")
+      .def_readonly("converged", &FrameReport::converged,
+                    "True if the registration's convergence test passed.")
+      .def_readonly("message", &FrameReport::message,
+                    "Why the frame failed, or the registration's stop message.")
+      .def_readonly("iterations", &FrameReport::iterations, "Iterations of the registration.")
+      .def_readonly("source_points", &FrameReport::source_points,
+                    "Frame points registered (after cropping and thinning).")
+      .def_readonly("map_points", &FrameReport::map_points, "Map points registered to.")
+      .def_readonly("inlier_ratio", &FrameReport::inlier_ratio, "Inlier ratio of the registration.")
+      .def_readonly("inlier_rmse_m", &FrameReport::inlier_rmse_m,
+                    "Inlier RMSE of the registration, metres.")
+      .def_readonly(
+          "threshold_m", &FrameReport::threshold_m,
+          "d_max given to the registration (3 sigma of the adaptive threshold), metres; 0 when "
+          "max_distance= fixes it.")
+      .def_readonly("index_build_ms", &FrameReport::index_build_ms,
+                    "KD-tree build over the map (plus normals or covariances), milliseconds.")
+      .def_readonly("time_ms", &FrameReport::time_ms,
+                    "The whole frame (thinning, index, registration, map update), milliseconds.")
+      .def("__repr__", [](const FrameReport& r) {
+        return "<sgd_icp.FrameReport " + std::to_string(r.index) + (r.failed ? " FAILED: " : ": ") +
+               r.message + ">";
+      });
+
+  std::string keywords;
+  for (const auto& s : odometry_settings_table()) {
+    keywords += (keywords.empty() ? "" : ", ") + s.spelled(SettingNames::field) + " (" +
+                format_number(s.get(OdometrySettings{})) + (s.unit.empty() ? "" : " ") +
+                std::string(s.unit) + ")";
+  }
+  py::class_<Odometry>(m, "Odometry",
+                       "Scan-to-map odometry: frames (points in their sensor frame) registered one "
+                       "at a time to a local voxel map, from a constant-velocity prediction, with "
+                       "an adaptive correspondence threshold (docs/odometry.md).")
+      .def(py::init([](const std::string& method, const py::kwargs& kwargs) {
+             return make_odometry(method, kwargs);
+           }),
+           "method"_a = "sgd",
+           ("method: the registration step, a --method of the CLI (" + method_list() +
+            "). Keywords: the odometry settings of `sgdicp odometry` (" + keywords +
+            "; 0 = derived from the first frame, docs/odometry.md) and the keywords of "
+            "register() for the method. max_distance= fixes d_max and turns the adaptive "
+            "threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for an "
+            "invalid value.")
+               .c_str())
+      .def(
+          "register_frame",
+          [](Odometry& o, const py::handle& points) {
+            const ConvertedCloud frame =
+                cloud_from_array(points, "frame", NonFinite::drop, /*allow_empty=*/true);
+            const Eigen::Matrix4d T = [&] {
+              const py::gil_scoped_release release;
+              return o.register_frame(frame.cloud);
+            }();
+            return array_from_matrix(T);
+          },
+          "points"_a,
+          "Registers the next frame, an (N, 3) float32/float64 array in its sensor frame "
+          "(metres), and returns its (4, 4) pose in the first frame's coordinates (the first "
+          "frame: the identity). A frame that fails (see last_report) gets the predicted pose.")
+      .def(
+          "skip_frame",
+          [](Odometry& o, const std::string& message) {
+            return array_from_matrix(o.skip_frame(message));
+          },
+          "message"_a,
+          "Records a frame that could not be read: it gets the predicted pose and a failed "
+          "report with `message`.")
+      .def_property_readonly(
+          "poses", [](const Odometry& o) { return stacked(o.poses()); },
+          "(K, 4, 4) float64 poses of the frames so far, in the first frame's coordinates.")
+      .def_property_readonly(
+          "reports", [](const Odometry& o) { return o.reports(); },
+          "A FrameReport per frame so far.")
+      .def_property_readonly(
+          "last_report",
+          [](const Odometry& o) -> py::object {
+            if (o.reports().empty()) return py::none();
+            return py::cast(o.reports().back());
+          },
+          "The FrameReport of the last frame, or None before the first.")
+      .def_property_readonly(
+          "voxel_size", [](const Odometry& o) { return o.voxel_size_m(); },
+          "The map's voxel size in use, metres (0 before the first frame when derived).")
+      .def_property_readonly(
+          "map_points", [](const Odometry& o) { return o.map() ? o.map()->size() : 0; },
+          "Points in the local map.")
+      .def_property_readonly(
+          "method", [](const Odometry& o) { return std::string(o.method()); },
+          "The registration method's name.")
+      .def("__len__", [](const Odometry& o) { return o.poses().size(); });
+}
+
+}  // namespace sgdicp::python

@@ -1,0 +1,119 @@
+"""sgd_icp.Odometry: a synthetic sequence with exact poses, failures, keywords, and the same
+trajectory as `sgdicp odometry` on the KITTI scans."""
+
+from __future__ import annotations
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import sgd_icp
+from conftest import find_cli, make_transform, shared_data_dir
+
+KITTI = shared_data_dir() / "kitti_odometry_seq00"
+
+
+def world(rng: np.random.Generator, n: int) -> np.ndarray:
+    """A 30 x 12 x 3 m room with 10 pillars (radius 0.3 m): floor, walls, pillars."""
+    kind = rng.integers(0, 4, n)
+    a, b, c = rng.random(n), rng.random(n), rng.random(n)
+    p = np.c_[-5 + 30 * a, -6 + 12 * b, np.zeros(n)]
+    walls = kind == 1
+    p[walls, 1] = np.where(b[walls] < 0.5, -6.0, 6.0)
+    p[walls, 2] = 3 * c[walls]
+    pillars = kind >= 2
+    k = (10 * a[pillars]).astype(int)
+    th = 2 * np.pi * b[pillars]
+    p[pillars] = np.c_[
+        -3 + 3.2 * k + 0.3 * np.cos(th), np.where(k % 2, 3.0, -3.5) + 0.3 * np.sin(th), 3 * c[pillars]
+    ]
+    return p
+
+
+def sequence(frames: int, seed: int = 1) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Frames in the sensor frame (a fresh sample of the world each) and their exact poses."""
+    rng = np.random.default_rng(seed)
+    T = make_transform(0, 0, 0, (0, 0, 1.2))
+    T0_inv = np.linalg.inv(T)
+    clouds, poses = [], []
+    for f in range(frames):
+        p = world(rng, 30000)
+        local = (p - T[:3, 3]) @ T[:3, :3]
+        local = local[np.linalg.norm(local, axis=1) < 12.0][:8000]
+        clouds.append((local + rng.normal(0, 0.005, local.shape)).astype(np.float32))
+        poses.append(T0_inv @ T)
+        T = T @ make_transform(0, 0, np.radians(1.0), (0.3 * (1 + 0.2 * np.sin(0.3 * f)), 0, 0))
+    return clouds, poses
+
+
+def test_synthetic_sequence_follows_the_truth():
+    clouds, truth = sequence(15)
+    odometry = sgd_icp.Odometry()
+    for cloud in clouds:
+        odometry.register_frame(cloud)
+    assert len(odometry) == 15
+    assert odometry.poses.shape == (15, 4, 4)
+    np.testing.assert_allclose(odometry.poses[0], np.eye(4))
+    assert not any(r.failed for r in odometry.reports)
+    end_error = np.linalg.inv(truth[-1]) @ odometry.poses[-1]
+    assert np.linalg.norm(end_error[:3, 3]) < 0.05  # 4 m travelled
+    assert 0 < odometry.voxel_size < 0.2
+    assert odometry.map_points > 0
+
+
+def test_an_empty_frame_fails_and_gets_the_prediction():
+    clouds, _ = sequence(3)
+    odometry = sgd_icp.Odometry()
+    for cloud in clouds:
+        odometry.register_frame(cloud)
+    T1, T2 = odometry.poses[1], odometry.poses[2]
+    T3 = odometry.register_frame(np.zeros((0, 3)))
+    report = odometry.last_report
+    assert report.failed and report.index == 3
+    assert "no point" in report.message
+    np.testing.assert_allclose(T3, T2 @ np.linalg.inv(T1) @ T2, atol=1e-9)
+    T4 = odometry.skip_frame("unreadable")
+    assert odometry.last_report.message == "unreadable"
+    assert T4.shape == (4, 4)
+
+
+def test_keywords_are_the_cli_options():
+    odometry = sgd_icp.Odometry(method="icp", voxel_size=0.5, max_points_per_voxel=5, max_iterations=30)
+    assert odometry.method == "icp"
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="max_range"):
+        sgd_icp.Odometry(max_range=0.0)
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="min_range"):
+        sgd_icp.Odometry(min_range=200.0)
+    with pytest.raises(TypeError):
+        sgd_icp.Odometry(no_such_setting=1)
+    with pytest.raises(TypeError):
+        sgd_icp.Odometry(voxel_size="big")
+    with pytest.raises(sgd_icp.InvalidSettingsError):
+        sgd_icp.Odometry(method="nope")
+
+
+def test_a_fixed_max_distance_turns_the_adaptive_threshold_off():
+    clouds, _ = sequence(3)
+    fixed = sgd_icp.Odometry(max_distance=0.5, max_distance_unit="m")
+    adaptive = sgd_icp.Odometry()
+    for cloud in clouds:
+        fixed.register_frame(cloud)
+        adaptive.register_frame(cloud)
+    assert fixed.reports[2].threshold_m == 0.0
+    assert adaptive.reports[2].threshold_m > 0.0
+
+
+@pytest.mark.skipif(not (KITTI / "velodyne").is_dir(), reason="no KITTI scans in ../shared/data")
+def test_cli_and_python_give_the_same_trajectory(tmp_path):
+    cli = find_cli()
+    if cli is None:
+        pytest.skip("no sgdicp binary (set SGDICP_BIN)")
+    out = tmp_path / "poses.txt"
+    subprocess.run([str(cli), "odometry", str(KITTI), "--poses-out", str(out), "-q"], check=True,
+                   capture_output=True)
+    cli_poses = np.loadtxt(out).reshape(-1, 3, 4)
+    odometry = sgd_icp.Odometry()
+    for f in sorted((KITTI / "velodyne").glob("*.bin")):
+        odometry.register_frame(sgd_icp.read_points(f))
+    np.testing.assert_allclose(odometry.poses[:, :3, :], cli_poses, atol=1e-6)
