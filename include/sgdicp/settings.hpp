@@ -21,6 +21,7 @@
 #include "sgdicp/refinement.hpp"
 #include "sgdicp/robust_kernel.hpp"
 #include "sgdicp/scaling.hpp"
+#include "sgdicp/uncertainty.hpp"
 
 namespace sgdicp {
 
@@ -74,6 +75,9 @@ struct SgdSettings {
   /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report
   /// it in the result (evaluation.hpp); costs about `evaluation_points` k-nearest queries.
   bool check_degeneracy = true;
+  /// Pose uncertainty of the result (uncertainty.hpp, docs/uncertainty.md): none, laplace or
+  /// sgld, with the sampler's and the calibration's settings.
+  UncertaintySettings uncertainty{};
 
   /// The paper's settings: m = 160, d_max = 0.5 scaled, the step rule's step size
   /// (default_learning_rate: the paper's fixed step alpha = 2, Adam 0.01), no refinement, the

@@ -24,3 +24,4 @@
 #include "sgdicp/scaling.hpp"
 #include "sgdicp/settings.hpp"
 #include "sgdicp/transform_io.hpp"
+#include "sgdicp/uncertainty.hpp"
