@@ -256,8 +256,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   // Matrices read from text carry few digits: project onto the nearest rotation.
   const PoseVector theta_init =
       pose_from_transform(scaling.to_scaled(frame.to_stored(orthonormalized(T_init))));
-  const PoseVector theta = run.minimise(theta_init, result);
-  result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
+  PoseVector theta = run.minimise(theta_init, result);
   // The uncertainty of any pose the run reports as its estimate (a pose that blew up or lost its
   // pairs has none).
   if (settings.uncertainty.method != UncertaintyType::none &&
@@ -270,13 +269,17 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
           return pose_from_transform(frame.to_clouds(scaling.to_metric(transform_from_pose(th))));
         },
         &src.cloud(),
+        &reference,
+        &scaling,
+        run.max_distance(),
         scaling.scale(),
         settings.cost,
         settings.batch_size,
         settings.seed,
         theta_init};
-    estimate_uncertainty(problem, settings.uncertainty, theta, result);
+    theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);
   }
+  result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
                    EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
                    clock);

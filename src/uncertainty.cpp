@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include "sgdicp/sampler.hpp"
@@ -85,11 +86,59 @@ struct FullPass {
   std::size_t paired_blocks = 0;
 };
 
+// The unit normal of the reference at point i: stored, or the direction of least spread of its
+// kSurfaceNeighbors nearest points (kept in `cache`, NaN = not computed yet).
+Eigen::Vector3d surface_normal(const ReferenceIndex& reference, std::uint32_t i,
+                               std::vector<Eigen::Vector3f>& cache,
+                               std::vector<Neighbor>& neighbors) {
+  const PointCloud& ref = reference.cloud();
+  if (ref.has_normals()) return ref.normals[i].cast<double>();
+  if (cache.empty()) cache.assign(ref.size(), Eigen::Vector3f::Constant(NAN));
+  if (std::isnan(cache[i].x())) {
+    reference.k_nearest(ref.points[i], kSurfaceNeighbors, neighbors);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& n : neighbors) mean += ref.points[n.index].cast<double>();
+    mean /= static_cast<double>(neighbors.size());
+    Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+    for (const auto& n : neighbors) {
+      const Eigen::Vector3d d = ref.points[n.index].cast<double>() - mean;
+      c += d * d.transpose();
+    }
+    cache[i] =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvectors().col(0).cast<float>();
+  }
+  return cache[i].cast<double>();
+}
+
+// Point-to-point pairs of a block with the information of the surface, n n^T.
+CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std::uint32_t>& block,
+                             const PoseVector& theta, std::vector<Eigen::Vector3f>& cache,
+                             std::vector<Neighbor>& neighbors) {
+  CostAccumulator cost(KernelType::none, 1.0, true);
+  const EulerPoseJacobian pose(theta);
+  const double k = p.scaling->scale();
+  const auto d_max_sq_m = static_cast<float>(p.max_distance * k * p.max_distance * k);
+  for (const std::uint32_t i : block) {
+    const Eigen::Vector3d s = p.scaling->to_scaled(p.source->points[i]);
+    const Eigen::Vector3d moved = pose.transform(s);
+    const auto nn = p.reference->nearest(p.scaling->to_metric(moved).cast<float>(), d_max_sq_m);
+    if (!nn) continue;
+    const Eigen::Vector3d n = surface_normal(*p.reference, nn->index, cache, neighbors);
+    const Eigen::Vector3d r = p.scaling->to_scaled(p.reference->cloud().points[nn->index]);
+    cost.add(pose.jacobian(s), moved - r, n * n.transpose());
+  }
+  return cost;
+}
+
 FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
                    const PoseVector& theta) {
   FullPass out;
+  std::vector<Eigen::Vector3f> cache;
+  std::vector<Neighbor> neighbors;
+  const bool surface = p.cost == CostType::point_to_point && p.reference != nullptr;
   for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
-    const CostAccumulator c = p.batch_cost(block, theta, true);
+    const CostAccumulator c = surface ? surface_cost(p, block, theta, cache, neighbors)
+                                      : p.batch_cost(block, theta, true);
     if (c.pairs() == 0) continue;
     const PoseVector g = 2.0 * c.gradient(1);
     out.jtj += 2.0 * c.hessian(1);
@@ -100,6 +149,16 @@ FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
     ++out.paired_blocks;
   }
   return out;
+}
+
+// sum w J^T Omega e over every source point with the run's own pairing and cost.
+PoseVector run_cost_gradient(const UncertaintyProblem& p, const UncertaintySettings& s,
+                             const PoseVector& theta) {
+  PoseVector sum = PoseVector::Zero();
+  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+    sum += 2.0 * p.batch_cost(block, theta, false).gradient(1);
+  }
+  return sum;
 }
 
 PoseVector prior_information() {
@@ -214,11 +273,20 @@ void fill_from_samples(const UncertaintyProblem& p, const std::vector<PoseVector
 
 }  // namespace
 
-void estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings& s,
-                          const PoseVector& theta_hat, RegistrationResult& result) {
-  if (s.method == UncertaintyType::none) return;
+PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                PoseVector theta_hat, RegistrationResult& result) {
+  if (s.method == UncertaintyType::none) return theta_hat;
   const detail::Stopwatch clock;
-  const FullPass full = full_pass(p, s, theta_hat);
+  // SGD stops within the noise ball of its mini-batch gradient, which is wider than the
+  // posterior: Gauss-Newton steps on every pair bring the estimate to the full-data optimum
+  // that the covariance describes (measured: docs/uncertainty.md).
+  FullPass full = full_pass(p, s, theta_hat);
+  for (int step = 0; step < kPolishSteps && full.pairs > 6; ++step) {
+    PoseMatrix h = full.jtj;
+    h.diagonal() += 1e-9 * h.trace() * PoseVector::Ones() + 1e-12 * prior_information();
+    theta_hat -= h.ldlt().solve(full.jte);
+    full = full_pass(p, s, theta_hat);
+  }
   result.uncertainty_pairs = full.pairs;
   const auto residuals = static_cast<double>(full.pairs * residuals_per_pair(p.cost));
   const PoseVector reported_hat = p.to_reported(theta_hat);
@@ -226,7 +294,7 @@ void estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings
     result.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
     result.covariance_se3 = result.covariance;
     result.message += "; no uncertainty: too few pairs at the optimum";
-    return;
+    return theta_hat;
   }
   const double sigma2 = full.sum_rho / (residuals - 6.0);  // scaled units^2
   result.residual_sigma_m = std::sqrt(sigma2) * p.scale_m;
@@ -239,12 +307,16 @@ void estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings
     const PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
     result.covariance = jm * cov * jm.transpose();
   } else {
+    // The control variate needs the full-data gradient of the energy the chain samples, the
+    // run's own cost (point-to-point: not the surface information's).
+    if (p.cost == CostType::point_to_point) post.jte_hat = run_cost_gradient(p, s, theta_hat);
     fill_from_samples(p, sgld_chain(p, s, post), reported_hat, result);
   }
   result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
   const PoseMatrix js = se3_jacobian(reported_hat);
   result.covariance_se3 = js * result.covariance * js.transpose();
   result.uncertainty_ms = clock.elapsed_ms();
+  return theta_hat;
 }
 
 }  // namespace sgdicp

@@ -7,6 +7,13 @@
 //            gradient of the registration's own pairing, started at the point estimate, with a
 //            control variate at the optimum (Baker et al. 2019) so that the mini-batch noise
 //            does not widen the chain.
+// The curvature of point-to-point: re-pairing lets a source point slide along the reference
+// surface at no cost, so the curvature of the nearest-neighbour objective is that of the
+// distance to the surface, J^T n n^T J (Pottmann and Hofer 2003), not the J^T J of pairs held
+// fixed, which pins every point and is over-confident along the surface by an order of
+// magnitude (measured: docs/uncertainty.md). The point-to-point covariance therefore uses the
+// point-to-plane information of its pairs, with normals of the reference (estimated from its
+// `kSurfaceNeighbors` nearest points where it has none).
 // Calibration (`temper`): nearest-neighbour residuals are not independent, so the likelihood of
 // n residuals holds fewer than n independent ones. A block sandwich estimator (the mini-batch
 // gradients summed per voxel block of side `block_size`) measures the factor kappa by which the
@@ -26,9 +33,11 @@
 #include "sgdicp/cost.hpp"
 #include "sgdicp/distance.hpp"
 #include "sgdicp/enum_names.hpp"
+#include "sgdicp/nearest_neighbor.hpp"
 #include "sgdicp/point_cloud.hpp"
 #include "sgdicp/pose.hpp"
 #include "sgdicp/result.hpp"
+#include "sgdicp/scaling.hpp"
 
 namespace sgdicp {
 
@@ -78,7 +87,12 @@ struct UncertaintyProblem {
   /// Scaled pose -> the reported theta (metric, between the clouds' frames).
   std::function<PoseVector(const PoseVector& theta)> to_reported;
   const PointCloud* source = nullptr;  ///< the source points the batches index, metres
-  double scale_m = 1.0;                ///< metres per scaled unit
+  /// Point-to-point: the reference, the scaling and the final d_max (scaled) for the pairs of
+  /// the surface information (below).
+  const ReferenceIndex* reference = nullptr;
+  const UnitCubeScaling* scaling = nullptr;
+  double max_distance = 0.0;
+  double scale_m = 1.0;  ///< metres per scaled unit
   CostType cost = CostType::point_to_point;
   std::size_t batch_size = 160;
   std::uint64_t seed = 0;
@@ -86,9 +100,14 @@ struct UncertaintyProblem {
 };
 
 /// Fills covariance, covariance_se3 (and for sgld samples, sample_mean) of `result` for the
-/// scaled point estimate theta_hat.
-void estimate_uncertainty(const UncertaintyProblem& problem, const UncertaintySettings& settings,
-                          const PoseVector& theta_hat, RegistrationResult& result);
+/// scaled point estimate theta_hat, after kPolishSteps Gauss-Newton steps over every pair that
+/// bring it to the full-data optimum; returns that optimum (scaled), the pose to report.
+[[nodiscard]] PoseVector estimate_uncertainty(const UncertaintyProblem& problem,
+                                              const UncertaintySettings& settings,
+                                              PoseVector theta_hat, RegistrationResult& result);
+
+/// Gauss-Newton steps over every pair before the covariance (measured: 2 reach the optimum).
+inline constexpr int kPolishSteps = 2;
 
 /// d xi / d theta at theta: the map of a theta covariance into the tangent space (right
 /// perturbation, translation first).
@@ -98,14 +117,16 @@ void estimate_uncertainty(const UncertaintyProblem& problem, const UncertaintySe
 [[nodiscard]] PoseMatrix pose_map_jacobian(const std::function<PoseVector(const PoseVector&)>& f,
                                            const PoseVector& x, double h = 1e-6);
 
-/// Scalar residuals per pair of a cost: the rank of its information matrix.
+/// Scalar residuals per pair of the information the covariance uses: 1 for point-to-point
+/// (its surface information n n^T) and point-to-plane, 3 for plane-to-plane.
 [[nodiscard]] inline std::size_t residuals_per_pair(CostType cost) {
-  return cost == CostType::point_to_plane ? 1 : 3;
+  return cost == CostType::plane_to_plane ? 3 : 1;
 }
 
 /// The weak prior: a Gaussian at the initial pose with this standard deviation (scaled units
 /// for the translation, rad for the angles); it only bounds unconstrained directions.
 inline constexpr double kPriorTranslationStd = 1.0;
+inline constexpr std::size_t kSurfaceNeighbors = 10;
 inline constexpr double kPriorRotationStd = 1.0;
 
 }  // namespace sgdicp
