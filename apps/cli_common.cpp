@@ -178,6 +178,16 @@ nlohmann::json matrix_to_json(const Eigen::Matrix4d& T) {
   return rows;
 }
 
+nlohmann::json pose_matrix_to_json(const Eigen::Matrix<double, 6, 6>& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int r = 0; r < 6; ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int c = 0; c < 6; ++c) row.push_back(m(r, c));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
 nlohmann::json result_to_json(const RegistrationResult& r) {
   nlohmann::json j{{"transform", matrix_to_json(r.T_reference_source)}};
   for_each_result_field([&](const char* name, auto member, const char*) {
@@ -187,6 +197,14 @@ nlohmann::json result_to_json(const RegistrationResult& r) {
       j[name] = r.*member;
     }
   });
+  if (r.uncertainty_ms > 0.0 || r.uncertainty_pairs > 0) {
+    j["covariance"] = pose_matrix_to_json(r.covariance);
+    j["covariance_se3"] = pose_matrix_to_json(r.covariance_se3);
+    if (!r.samples.empty()) {
+      j["sample_mean"] = std::vector<double>(r.sample_mean.data(), r.sample_mean.data() + 6);
+      j["samples"] = r.samples.size();
+    }
+  }
   return j;
 }
 

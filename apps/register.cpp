@@ -1,6 +1,7 @@
 // `sgdicp register SOURCE REFERENCE`: one registration, printed as text or JSON.
 #include <cctype>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -28,6 +29,7 @@ struct RegisterOptions {
   std::string aligned;
   std::string picture;
   std::string trace;
+  std::string samples;
   bool json = false;
   SettingsOptions settings;
   DepthOptions depth;
@@ -50,6 +52,29 @@ void write_trace_csv(const std::string& path, const RegistrationResult& r) {
   if (!out) throw IoError(path + ": write error");
 }
 
+// One pose vector (x y z roll pitch yaw of T_reference_source, metres and radians) per line.
+void write_samples(const std::string& path, const RegistrationResult& r) {
+  std::ofstream out(path);
+  if (!out) throw IoError(path + ": cannot open for writing");
+  out << "# x_m y_m z_m roll_rad pitch_rad yaw_rad (theta of T_reference_source, R = Rz Ry Rx)\n";
+  out << std::setprecision(17);
+  for (const auto& theta : r.samples) {
+    for (int k = 0; k < 6; ++k) out << (k ? " " : "") << theta[k];
+    out << '\n';
+  }
+  if (!out) throw IoError(path + ": write error");
+}
+
+// The standard deviations of theta, from the covariance's diagonal.
+void print_uncertainty(const RegistrationResult& r) {
+  const auto sd = [&](int k) { return std::sqrt(r.covariance(k, k)); };
+  std::cout << std::setprecision(3) << "std (x, y, z) [m]: " << sd(0) << ' ' << sd(1) << ' '
+            << sd(2) << ", std (roll, pitch, yaw) [deg]: " << sd(3) * 180.0 / std::numbers::pi
+            << ' ' << sd(4) * 180.0 / std::numbers::pi << ' ' << sd(5) * 180.0 / std::numbers::pi
+            << " (correlation factor " << r.correlation_factor << ", " << r.uncertainty_ms
+            << " ms)\n";
+}
+
 // The picture is always PNG: a name that says otherwise is refused before any work is done.
 void check_picture_name(const std::string& path) {
   std::string extension = std::filesystem::path(path).extension().string();
@@ -63,6 +88,10 @@ void check_picture_name(const std::string& path) {
 void run(const RegisterOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   if (!o.picture.empty()) check_picture_name(o.picture);
+  if (!o.samples.empty() && method.sgd.uncertainty.method != UncertaintyType::sgld) {
+    throw InvalidSettingsError("--samples " + o.samples +
+                               ": only --uncertainty sgld draws samples");
+  }
   const Eigen::Matrix4d T_init =
       o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
   std::optional<Eigen::Matrix4d> T_gt;
@@ -75,6 +104,7 @@ void run(const RegisterOptions& o) {
 
   if (!o.output.empty()) write_transform(o.output, result.T_reference_source);
   if (!o.trace.empty()) write_trace_csv(o.trace, result);
+  if (!o.samples.empty()) write_samples(o.samples, result);
   if (!o.aligned.empty()) {
     write_point_cloud(o.aligned,
                       transformed(source, result.T_reference_source, reference_cloud.origin_m));
@@ -127,6 +157,9 @@ void run(const RegisterOptions& o) {
               << " deg (geodesic), " << rotation_error_euler_sum(result.T_reference_source, *T_gt)
               << " rad (sum of |d roll|, |d pitch|, |d yaw|)\n";
   }
+  if (method.sgd.uncertainty.method != UncertaintyType::none && result.uncertainty_pairs > 0) {
+    print_uncertainty(result);
+  }
   if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
   if (result.degenerate) {
     std::cerr << "warning: degenerate geometry (constraint ratio " << result.constraint_ratio
@@ -168,6 +201,9 @@ void add_register_command(CLI::App& app) {
       "--trace", o->trace,
       "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");
   add_depth_options(*cmd, o->depth);
+  cmd->add_option("--samples", o->samples,
+                  "Write the SGLD samples (--uncertainty sgld), one pose vector x y z roll pitch "
+                  "yaw per line (metres, radians)");
   add_method_options(*cmd, o->settings, false);
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });

@@ -11,6 +11,7 @@
 #include "sgdicp/preprocessing.hpp"
 #include "sgdicp/sampler.hpp"
 #include "sgdicp/scaling.hpp"
+#include "sgdicp/uncertainty.hpp"
 #include "solver_support.hpp"
 
 namespace sgdicp {
@@ -197,6 +198,14 @@ class SgdRun {
     return theta;
   }
 
+  // The cost of `batch` at theta with the run's final pairing (for the uncertainty).
+  CostAccumulator cost_at(const std::vector<std::uint32_t>& batch, const PoseVector& theta,
+                          bool with_hessian) {
+    distances_.clear();
+    return pairing_.accumulate(batch, EulerPoseJacobian(theta), schedule_.max_distance(),
+                               with_hessian, distances_);
+  }
+
   // d_max at the end of the run, scaled.
   [[nodiscard]] double max_distance() const { return schedule_.max_distance(); }
 
@@ -240,6 +249,7 @@ class SgdRun {
   ConvergenceMonitor monitor_;
   RefinementSchedule schedule_;
   std::vector<std::uint32_t> batch_;
+  std::vector<float> distances_;
   std::size_t empty_batches_ = 0;
 };
 
@@ -262,7 +272,29 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   // Matrices read from text carry few digits: project onto the nearest rotation.
   const PoseVector theta_init =
       pose_from_transform(scaling.to_scaled(frame.to_stored(orthonormalized(T_init))));
-  const PoseVector theta = run.minimise(theta_init, result);
+  PoseVector theta = run.minimise(theta_init, result);
+  // The uncertainty of any pose the run reports as its estimate (a pose that blew up or lost its
+  // pairs has none).
+  if (settings.uncertainty.method != UncertaintyType::none &&
+      (result.converged || result.stop_reason == StopReason::max_iterations)) {
+    const UncertaintyProblem problem{
+        [&run](const auto& batch, const PoseVector& th, bool h) {
+          return run.cost_at(batch, th, h);
+        },
+        [&](const PoseVector& th) {
+          return pose_from_transform(frame.to_clouds(scaling.to_metric(transform_from_pose(th))));
+        },
+        &src.cloud(),
+        &reference,
+        &scaling,
+        run.max_distance(),
+        scaling.scale(),
+        settings.cost,
+        settings.batch_size,
+        settings.seed,
+        theta_init};
+    theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);
+  }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
                    EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},

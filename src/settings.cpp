@@ -225,6 +225,7 @@ using O = OptimizerSettings;
 using C = ConvergenceSettings;
 using R = RefinementSettings;
 using N = NeighborhoodSettings;
+using U = UncertaintySettings;
 
 // Ranges (docs/registration.md explains each): wide enough for every real use, from a 15 cm
 // scan to a km-scale map, narrow enough that no value crashes, allocates absurdly or returns the
@@ -427,9 +428,48 @@ std::vector<Setting<S>> result_and_pair_settings() {
   };
 }
 
+// The pose uncertainty of the result (docs/uncertainty.md).
+std::vector<Setting<S>> uncertainty_settings() {
+  return {
+      setting<S, &S::uncertainty, &U::method>(
+          {"uncertainty",
+           "uncertainty.method",
+           {},
+           "",
+           "Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the "
+           "residual variance) or sgld (Bayesian ICP: Langevin samples)"}),
+      setting<S, &S::uncertainty, &U::samples>(
+          {"uncertainty-samples", "uncertainty.samples", {2.0, 1e6}, "", "sgld: samples kept"}),
+      setting<S, &S::uncertainty, &U::burn_in>({"burn-in",
+                                                "uncertainty.burn_in",
+                                                {0.0, 1e7},
+                                                "",
+                                                "sgld: iterations discarded before the first "
+                                                "sample"}),
+      setting<S, &S::uncertainty, &U::thinning>(
+          {"thinning", "uncertainty.thinning", {1.0, 1e4}, "", "sgld: iterations per sample"}),
+      setting<S, &S::uncertainty, &U::step>(
+          {"sgld-step",
+           "uncertainty.step",
+           {1e-4, 1.0},
+           "",
+           "sgld: step size, as the contraction per iteration along the stiffest axis"}),
+      setting<S, &S::uncertainty, &U::temper>(
+          {"temper",
+           "uncertainty.temper",
+           {},
+           "",
+           "Temper the likelihood by the measured correlation of the residuals (false: "
+           "residuals treated as independent, as the peers do)"}),
+      setting<S, &S::uncertainty, &U::block_size>(
+          {"block-size", "uncertainty.block_size", kScaledRange, "",
+           "Block side of the sandwich estimator that measures the correlation of residuals"}),
+  };
+}
+
 std::vector<Setting<S>> make_sgd_table() {
   std::vector<Setting<S>> table = step_settings();
-  for (auto part : {stop_settings(), result_and_pair_settings()}) {
+  for (auto part : {stop_settings(), result_and_pair_settings(), uncertainty_settings()}) {
     table.insert(table.end(), part.begin(), part.end());
   }
   return table;

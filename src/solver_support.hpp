@@ -86,6 +86,10 @@ class PairFrame {
   [[nodiscard]] Eigen::Matrix4d to_stored(const Eigen::Matrix4d& T) const {
     return origin_m_.isZero() ? T : between_stored(T, origin_m_, origin_m_);
   }
+  /// A transform between the stored coordinates -> between the clouds' frames.
+  [[nodiscard]] Eigen::Matrix4d to_clouds(const Eigen::Matrix4d& T) const {
+    return origin_m_.isZero() ? T : between_frames(T, origin_m_, origin_m_);
+  }
   /// The transforms of a finished run (result and trace) back into the clouds' frames.
   void to_clouds(RegistrationResult& result) const {
     if (origin_m_.isZero()) return;

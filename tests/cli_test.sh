@@ -114,7 +114,7 @@ check_help() {
     return
   fi
   local missing_default
-  missing_default="$(grep -Ev -- '^ +(-h,)?--help|^ +--version|^ +--json|^ +(-o,)?--output|^ +--aligned|^ +--picture|^ +--trace|^ +--ground-truth|^ +--csv' "$entries" |
+  missing_default="$(grep -Ev -- '^ +(-h,)?--help|^ +--version|^ +--json|^ +(-o,)?--output|^ +--aligned|^ +--picture|^ +--trace|^ +--samples|^ +--ground-truth|^ +--csv' "$entries" |
     grep -Fv '[default:' | sed -E 's/^ +//; s/ .*//' | tr '\n' ' ')"
   if [ -n "$missing_default" ]; then
     fail "$name: options without '[default:' in their help: $missing_default"
@@ -703,6 +703,44 @@ sys.exit(0 if j["translation_error_m"] < 0.02 and j["rotation_error_geodesic_deg
     fail "7-Scenes depth pair (exit $rc): $(head -c 600 "$tmp/out") $(head -c 300 "$tmp/err")"
   fi
 fi
+# Pose uncertainty (docs/uncertainty.md).
+run register "$MOVED" "$REF" --uncertainty laplace --json
+if [ "$rc" -eq 0 ] && python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+for key in ("covariance", "covariance_se3"):
+    m = d[key]
+    assert len(m) == 6 and all(len(r) == 6 for r in m), key
+    assert all(m[i][i] > 0 for i in range(6)), key
+    assert all(abs(m[i][j] - m[j][i]) <= 1e-12 * (abs(m[i][j]) + 1e-30) for i in range(6) for j in range(6))
+assert d["correlation_factor"] >= 1 and d["residual_sigma_m"] > 0
+' <"$tmp/out"; then
+  pass "register --uncertainty laplace --json writes covariance and covariance_se3 as 6x6 lists"
+else
+  fail "register --uncertainty laplace --json (exit $rc): $(head -c 400 "$tmp/err")"
+fi
+run register "$MOVED" "$REF" --uncertainty sgld --uncertainty-samples 20 --samples "$tmp/samples.txt" --json
+if [ "$rc" -eq 0 ] && [ "$(grep -vc '^#' "$tmp/samples.txt")" -eq 20 ] &&
+  awk '!/^#/ && NF != 6 { bad = 1 } END { exit bad }' "$tmp/samples.txt" &&
+  python3 -c 'import json, sys; d = json.load(sys.stdin); assert len(d["sample_mean"]) == 6 and d["samples"] == 20' <"$tmp/out"; then
+  pass "register --uncertainty sgld --samples writes one pose vector per sample"
+else
+  fail "register --uncertainty sgld --samples (exit $rc): $(head -c 400 "$tmp/err")"
+fi
+run register "$MOVED" "$REF" --uncertainty sgld --uncertainty-samples 20 --samples "$tmp/samples2.txt" --json
+if [ "$rc" -eq 0 ] && cmp -s "$tmp/samples.txt" "$tmp/samples2.txt"; then
+  pass "register --uncertainty sgld: the same seed gives the same samples"
+else
+  fail "register --uncertainty sgld is not reproducible (exit $rc)"
+fi
+expect_error "register --uncertainty with an unknown name" "uncertainty.*(expected none, laplace or sgld)|uncertainty" \
+  register "$MOVED" "$REF" --uncertainty svgd2
+expect_error "register --samples without sgld" "--samples.*sgld" \
+  register "$MOVED" "$REF" --uncertainty laplace --samples "$tmp/x.txt"
+expect_error "register --uncertainty with a batch method" "--uncertainty laplace: only the SGD methods" \
+  register "$MOVED" "$REF" --method icp --uncertainty laplace
+expect_error "register --thinning 0" "--thinning 0: must be in" register "$MOVED" "$REF" --thinning 0
+expect_error "register --sgld-step nan" "--sgld-step" register "$MOVED" "$REF" --sgld-step nan
 
 echo "(${skipped} skipped)"
 finish

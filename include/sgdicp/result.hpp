@@ -73,6 +73,21 @@ struct RegistrationResult {
   double constraint_ratio = 0.0;
   bool degenerate = false;        ///< constraint_ratio below the threshold: see `message`
   std::vector<TraceEntry> trace;  ///< per iteration, when record_trace is set
+
+  // Pose uncertainty (SgdSettings::uncertainty; docs/uncertainty.md), zero without it.
+  /// Covariance of theta = (x, y, z, roll, pitch, yaw) of T_reference_source (R = Rz Ry Rx),
+  /// metres and radians.
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  /// The same in the tangent space of SE(3): xi = (rho, phi), translation first, right
+  /// perturbation T = T_reference_source * Exp(xi) (source frame), metres and radians.
+  Eigen::Matrix<double, 6, 6> covariance_se3 = Eigen::Matrix<double, 6, 6>::Zero();
+  /// sgld: the samples of theta (as `covariance`), and their mean.
+  std::vector<Eigen::Matrix<double, 6, 1>> samples;
+  Eigen::Matrix<double, 6, 1> sample_mean = Eigen::Matrix<double, 6, 1>::Zero();
+  double residual_sigma_m = 0.0;      ///< RMS of the scalar residuals at the optimum, metres
+  double correlation_factor = 0.0;    ///< kappa: naive covariance too narrow by this factor
+  std::size_t uncertainty_pairs = 0;  ///< pairs of the full-data pass at the optimum
+  double uncertainty_ms = 0.0;        ///< wall time of the uncertainty (inside time_ms)
 };
 
 /// Calls f(name, member pointer, description) for every field of RegistrationResult but the
@@ -110,6 +125,16 @@ void for_each_result_field(F&& f) {
   f("degenerate", &R::degenerate,
     "constraint_ratio below the threshold: the transform is not trustworthy along some motion "
     "(see message).");
+  f("residual_sigma_m", &R::residual_sigma_m,
+    "With uncertainty: RMS of the scalar residuals of the pairs at the optimum, metres (sigma of "
+    "the likelihood).");
+  f("correlation_factor", &R::correlation_factor,
+    "With uncertainty: kappa, the factor by which the covariance of independent residuals is too "
+    "narrow (block sandwich estimator); the likelihood is tempered by 1/kappa with temper.");
+  f("uncertainty_pairs", &R::uncertainty_pairs,
+    "With uncertainty: pairs of the full-data pass at the optimum.");
+  f("uncertainty_ms", &R::uncertainty_ms,
+    "With uncertainty: its wall time, milliseconds (included in time_ms).");
 }
 
 }  // namespace sgdicp

@@ -21,6 +21,7 @@
 #include "sgdicp/refinement.hpp"
 #include "sgdicp/robust_kernel.hpp"
 #include "sgdicp/scaling.hpp"
+#include "sgdicp/uncertainty.hpp"
 
 namespace sgdicp {
 
@@ -78,6 +79,9 @@ struct SgdSettings {
   /// clouds, of the CLI and of Python (KdTreeSettings::num_threads); the SGD loop itself runs on
   /// one. 0 = every core. The result is identical for any count.
   std::size_t num_threads = 1;
+  /// Pose uncertainty of the result (uncertainty.hpp, docs/uncertainty.md): none, laplace or
+  /// sgld, with the sampler's and the calibration's settings.
+  UncertaintySettings uncertainty{};
 
   /// The paper's settings: m = 160, d_max = 0.5 scaled, the step rule's step size
   /// (default_learning_rate: the paper's fixed step alpha = 2, Adam 0.01), no refinement, the

@@ -29,3 +29,4 @@
 #include "sgdicp/trajectory_metrics.hpp"
 #include "sgdicp/transform_io.hpp"
 #include "sgdicp/voxel_map.hpp"
+#include "sgdicp/uncertainty.hpp"

@@ -27,6 +27,7 @@ _KernelName = Union["KernelType", str]
 _UnitName = Union["DistanceUnit", str]
 _DistanceValue = Union[float, "Distance"]
 _MethodName = Literal["sgd", "sgd-plane", "sgd-gicp", "icp", "icp-plane", "gicp"]
+_UncertaintyName = Literal["none", "laplace", "sgld"]
 
 # ---- errors
 
@@ -119,6 +120,17 @@ class KernelType(enum.Enum):
     """Geman-McClure"""
     welsch = 4
     """Welsch"""
+
+
+class UncertaintyType(enum.Enum):
+    """Pose uncertainty of a registration (docs/uncertainty.md)."""
+
+    none = 0
+    """no covariance; the default"""
+    laplace = 1
+    """inverse Gauss-Newton matrix at the optimum times the residual variance"""
+    sgld = 2
+    """Bayesian ICP: pre-conditioned stochastic gradient Langevin samples"""
 
 
 class Distance:
@@ -258,6 +270,44 @@ class RefinementSettings:
     def __deepcopy__(self, memo: Any) -> RefinementSettings: ...
 
 
+class UncertaintySettings:
+    """Pose uncertainty of the result and its sampler and calibration (Settings.uncertainty;
+    docs/uncertainty.md).
+    """
+
+    method: UncertaintyType
+    """Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the residual
+    variance) or sgld (Bayesian ICP: Langevin samples) (UncertaintyType or one of its names).
+    Keyword uncertainty=. Default UncertaintyType.none.
+    """
+    samples: int
+    """sgld: samples kept, in [2, 1000000]. Keyword uncertainty_samples=. Default 200."""
+    burn_in: int
+    """sgld: iterations discarded before the first sample, in [0, 10000000]. Keyword burn_in=.
+    Default 50.
+    """
+    thinning: int
+    """sgld: iterations per sample, in [1, 10000]. Keyword thinning=. Default 5."""
+    step: float
+    """sgld: step size, as the contraction per iteration along the stiffest axis, in [0.0001, 1].
+    Keyword sgld_step=. Default 0.1.
+    """
+    temper: bool
+    """Temper the likelihood by the measured correlation of the residuals (false: residuals treated
+    as independent, as the peers do). Keyword temper=. Default True.
+    """
+    block_size: Distance
+    """Block side of the sandwich estimator that measures the correlation of residuals, a Distance
+    in [1e-06, 10] scaled units or [1e-06, 1000000] m. Keyword block_size=. Default
+    Distance.scaled(0.1).
+    """
+
+    def __init__(self) -> None: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __copy__(self) -> UncertaintySettings: ...
+    def __deepcopy__(self, memo: Any) -> UncertaintySettings: ...
+
+
 class NeighborhoodSettings:
     """k-nearest neighbourhoods for the normals and covariances of the plane costs
     (Settings.neighborhood).
@@ -311,6 +361,8 @@ class Settings:
     """ConvergenceSettings."""
     refinement: RefinementSettings
     """RefinementSettings."""
+    uncertainty: UncertaintySettings
+    """UncertaintySettings. Default: no uncertainty."""
     cost: CostType
     """Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP) (CostType
     or one of its names). Keyword cost=. Default CostType.point_to_point.
@@ -404,6 +456,13 @@ class Settings:
         threads: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
+        uncertainty: _UncertaintyName = ...,
+        uncertainty_samples: int = ...,
+        burn_in: int = ...,
+        thinning: int = ...,
+        sgld_step: float = ...,
+        temper: bool = ...,
+        block_size: _DistanceValue = ...,
     ) -> None:
         """The default settings with the flat keyword overrides applied (see register())."""
 
@@ -445,6 +504,13 @@ class Settings:
         threads: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
+        uncertainty: _UncertaintyName = ...,
+        uncertainty_samples: int = ...,
+        burn_in: int = ...,
+        thinning: int = ...,
+        sgld_step: float = ...,
+        temper: bool = ...,
+        block_size: _DistanceValue = ...,
     ) -> Settings:
         """The paper's settings: m = 160, d_max = 0.5 scaled, fixed step alpha = 2 ('sgd') or Adam
         0.01 ('adam'), no refinement, the last iterate, the lower-corner scaling origin; then the
@@ -489,6 +555,13 @@ class Settings:
         threads: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
+        uncertainty: _UncertaintyName = ...,
+        uncertainty_samples: int = ...,
+        burn_in: int = ...,
+        thinning: int = ...,
+        sgld_step: float = ...,
+        temper: bool = ...,
+        block_size: _DistanceValue = ...,
     ) -> Settings:
         """A copy with the flat keyword overrides of register() applied."""
 
@@ -800,6 +873,39 @@ class RegistrationResult:
     @property
     def trace(self) -> Trace:
         """Per-iteration Trace; empty unless record_trace=True."""
+    @property
+    def residual_sigma_m(self) -> float:
+        """With uncertainty: RMS of the scalar residuals of the pairs at the optimum, metres (sigma
+        of the likelihood).
+        """
+    @property
+    def correlation_factor(self) -> float:
+        """With uncertainty: kappa, the factor by which the covariance of independent residuals is
+        too narrow (block sandwich estimator); the likelihood is tempered by 1/kappa with temper.
+        """
+    @property
+    def uncertainty_pairs(self) -> int:
+        """With uncertainty: pairs of the full-data pass at the optimum."""
+    @property
+    def uncertainty_ms(self) -> float:
+        """With uncertainty: its wall time, milliseconds (included in time_ms)."""
+    @property
+    def covariance(self) -> npt.NDArray[np.float64]:
+        """(6, 6) float64: covariance of theta = (x, y, z, roll, pitch, yaw) of T_reference_source
+        (R = Rz(yaw) Ry(pitch) Rx(roll)), metres and radians; zeros unless uncertainty='laplace'
+        or 'sgld' (docs/uncertainty.md).
+        """
+    @property
+    def covariance_se3(self) -> npt.NDArray[np.float64]:
+        """(6, 6) float64: the same in the tangent space of SE(3), xi = (rho, phi) translation
+        first, right perturbation T = T_reference_source @ Exp(xi).
+        """
+    @property
+    def samples(self) -> npt.NDArray[np.float64]:
+        """(K, 6) float64: the SGLD samples of theta (as covariance); (0, 6) otherwise."""
+    @property
+    def sample_mean(self) -> npt.NDArray[np.float64]:
+        """(6,) float64: the mean of the samples (zeros without samples)."""
 
 
 def register(
@@ -842,6 +948,13 @@ def register(
     check_degeneracy: bool = ...,
     evaluation_points: int = ...,
     record_trace: bool = ...,
+    uncertainty: _UncertaintyName = ...,
+    uncertainty_samples: int = ...,
+    burn_in: int = ...,
+    thinning: int = ...,
+    sgld_step: float = ...,
+    temper: bool = ...,
+    block_size: _DistanceValue = ...,
 ) -> RegistrationResult:
     """Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
@@ -900,7 +1013,9 @@ def register(
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
         check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True), record_trace
-        (False).
+        (False), uncertainty (UncertaintyType.none), uncertainty_samples (200, [2, 1000000]),
+        burn_in (50, [0, 10000000]), thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]),
+        temper (True), block_size (Distance.scaled(0.1)).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in

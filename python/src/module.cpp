@@ -155,6 +155,10 @@ struct Result {
   std::size_t reference_points = 0;
   std::size_t reference_non_finite_dropped = 0;
   Trace trace;
+  py::array_t<double> covariance;      // (6, 6)
+  py::array_t<double> covariance_se3;  // (6, 6)
+  py::array_t<double> samples;         // (K, 6)
+  py::array_t<double> sample_mean;     // (6,)
 };
 
 Trace make_trace(const std::vector<TraceEntry>& entries) {
@@ -188,11 +192,30 @@ Trace make_trace(const std::vector<TraceEntry>& entries) {
   return t;
 }
 
+// A (rows, 6) array of `rows` values of `at(i, k)`.
+template <typename F>
+py::array_t<double> pose_rows(py::ssize_t rows, F&& at) {
+  py::array_t<double> out(std::vector<py::ssize_t>{rows, 6});
+  auto a = out.mutable_unchecked<2>();
+  for (py::ssize_t i = 0; i < rows; ++i) {
+    for (py::ssize_t k = 0; k < 6; ++k) a(i, k) = at(i, k);
+  }
+  return out;
+}
+
 Result make_result(RegistrationResult r) {
   Result out;
   out.T_reference_source = array_from_matrix(r.T_reference_source);
   out.trace = make_trace(r.trace);
   r.trace.clear();
+  out.covariance = pose_rows(6, [&](auto i, auto k) { return r.covariance(i, k); });
+  out.covariance_se3 = pose_rows(6, [&](auto i, auto k) { return r.covariance_se3(i, k); });
+  out.samples = pose_rows(static_cast<py::ssize_t>(r.samples.size()), [&](auto i, auto k) {
+    return r.samples[static_cast<std::size_t>(i)][k];
+  });
+  out.sample_mean = py::array_t<double>(6);
+  for (py::ssize_t k = 0; k < 6; ++k) out.sample_mean.mutable_at(k) = r.sample_mean[k];
+  r.samples.clear();
   out.fields = std::move(r);
   return out;
 }
@@ -559,6 +582,17 @@ void bind_results(py::module_& m) {
       .def_readonly("reference_non_finite_dropped", &Result::reference_non_finite_dropped,
                     "Reference rows dropped for a NaN or infinite coordinate.")
       .def_readonly("trace", &Result::trace, "Per-iteration Trace; empty unless record_trace=True.")
+      .def_readonly("covariance", &Result::covariance,
+                    "(6, 6) float64: covariance of theta = (x, y, z, roll, pitch, yaw) of "
+                    "T_reference_source (R = Rz(yaw) Ry(pitch) Rx(roll)), metres and radians; "
+                    "zeros unless uncertainty='laplace' or 'sgld' (docs/uncertainty.md).")
+      .def_readonly("covariance_se3", &Result::covariance_se3,
+                    "(6, 6) float64: the same in the tangent space of SE(3), xi = (rho, phi) "
+                    "translation first, right perturbation T = T_reference_source @ Exp(xi).")
+      .def_readonly("samples", &Result::samples,
+                    "(K, 6) float64: the SGLD samples of theta (as covariance); (0, 6) otherwise.")
+      .def_readonly("sample_mean", &Result::sample_mean,
+                    "(6,) float64: the mean of the samples (zeros without samples).")
       .def("__repr__", [](const Result& r) {
         return std::string(py::str("<sgd_icp.RegistrationResult {}: {} iterations, {} points "
                                    "processed, inlier RMSE {:.4g} m ({:.1%} inliers), {:.1f} ms>")

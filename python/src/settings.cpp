@@ -43,6 +43,9 @@ constexpr std::string_view python_class(CostType) {
 constexpr std::string_view python_class(KernelType) {
   return "KernelType";
 }
+constexpr std::string_view python_class(UncertaintyType) {
+  return "UncertaintyType";
+}
 constexpr std::string_view python_class(Distance::Unit) {
   return "DistanceUnit";
 }
@@ -237,6 +240,14 @@ std::string repr(const NeighborhoodSettings& n) {
               n.viewpoint.z());
 }
 
+std::string repr(const UncertaintySettings& u) {
+  return py::str(
+             "UncertaintySettings(method=UncertaintyType.{}, samples={!r}, burn_in={!r}, "
+             "thinning={!r}, step={!r}, temper={!r}, block_size={})")
+      .format(to_string(u.method), u.samples, u.burn_in, u.thinning, u.step, u.temper,
+              repr(u.block_size));
+}
+
 std::string cost_name(CostType t) {
   std::string name(to_string(t));
   std::replace(name.begin(), name.end(), '-', '_');
@@ -255,13 +266,13 @@ std::string repr(const SgdSettings& s) {
              "convergence={}, refinement={}, cost=CostType.{}, kernel=KernelType.{}, "
              "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
              "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
-             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r})")
+             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r}, uncertainty={})")
       .format(s.batch_size, repr(s.max_correspondence_distance), repr(s.optimizer),
               repr(s.convergence), repr(s.refinement), cost_name(s.cost), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
               s.scaling_origin == ScalingOrigin::center ? "center" : "lower_corner",
               s.max_iterations, s.seed, s.average_iterates, s.evaluation_points, s.record_trace,
-              s.check_degeneracy, s.robust_scaling, s.num_threads);
+              s.check_degeneracy, s.robust_scaling, s.num_threads, repr(s.uncertainty));
 }
 
 std::string repr(const BatchSettings& s) {
@@ -433,6 +444,36 @@ void bind_enums(py::module_& m) {
       .value("geman_mcclure", KernelType::geman_mcclure, "Geman-McClure")
       .value("welsch", KernelType::welsch, "Welsch")
       .finalize();
+
+  py::native_enum<UncertaintyType>(m, "UncertaintyType", "enum.Enum",
+                                   "Pose uncertainty of a registration (docs/uncertainty.md).")
+      .value("none", UncertaintyType::none, "no covariance; the default")
+      .value("laplace", UncertaintyType::laplace,
+             "inverse Gauss-Newton matrix at the optimum times the residual variance")
+      .value("sgld", UncertaintyType::sgld,
+             "Bayesian ICP: pre-conditioned stochastic gradient Langevin samples")
+      .finalize();
+}
+
+void bind_uncertainty(py::module_& m) {
+  py::class_<UncertaintySettings> u(
+      m, "UncertaintySettings",
+      "Pose uncertainty of the result and its sampler and calibration (Settings.uncertainty; "
+      "docs/uncertainty.md).");
+  u.def(py::init<>());
+  u.def_property(
+      "method", [](const UncertaintySettings& s) { return s.method; },
+      [](UncertaintySettings& s, const py::handle& v) {
+        s.method = enum_from_object<UncertaintyType>(v, "method");
+      },
+      "");
+  def_count(u, "samples", &UncertaintySettings::samples, "");
+  def_count(u, "burn_in", &UncertaintySettings::burn_in, "");
+  def_count(u, "thinning", &UncertaintySettings::thinning, "");
+  u.def_readwrite("step", &UncertaintySettings::step, "");
+  def_flag(u, "temper", &UncertaintySettings::temper, "");
+  def_distance(u, "block_size", &UncertaintySettings::block_size, "");
+  def_value_methods(u);
 }
 
 void bind_distance(py::module_& m) {
@@ -623,6 +664,8 @@ void bind_sgd_settings(py::module_& m) {
                      "OptimizerSettings. Default Adam with learning rate 0.01.")
       .def_readwrite("convergence", &SgdSettings::convergence, "ConvergenceSettings.")
       .def_readwrite("refinement", &SgdSettings::refinement, "RefinementSettings.")
+      .def_readwrite("uncertainty", &SgdSettings::uncertainty,
+                     "UncertaintySettings. Default: no uncertainty.")
       .def_property(
           "cost", [](const SgdSettings& s) { return s.cost; },
           [](SgdSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); },
@@ -780,6 +823,7 @@ std::string class_of(std::string_view field, std::string_view top) {
   if (part == "optimizer") return "OptimizerSettings";
   if (part == "convergence") return "ConvergenceSettings";
   if (part == "refinement") return "RefinementSettings";
+  if (part == "uncertainty") return "UncertaintySettings";
   return "NeighborhoodSettings";
 }
 
@@ -880,6 +924,7 @@ void bind_settings(py::module_& m) {
   bind_optimizer(m);
   bind_convergence(m);
   bind_neighborhood(m);
+  bind_uncertainty(m);
   bind_sgd_settings(m);
   bind_batch_settings(m);
   document_attributes(m, sgd_settings_table(), "Settings");

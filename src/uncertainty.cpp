@@ -1,0 +1,322 @@
+#include "sgdicp/uncertainty.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+#include <tuple>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "sgdicp/sampler.hpp"
+#include "solver_support.hpp"
+
+namespace sgdicp {
+
+PoseMatrix se3_jacobian(const PoseVector& theta) {
+  const Eigen::Matrix3d r = rotation_from_rpy(theta[3], theta[4], theta[5]);
+  const auto d = rotation_derivatives(theta[3], theta[4], theta[5]);
+  PoseMatrix j = PoseMatrix::Zero();
+  j.topLeftCorner<3, 3>() = r.transpose();  // rho = R^T dt
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Matrix3d w = r.transpose() * d[k];  // skew(phi) to first order
+    j.block<3, 1>(3, 3 + k) << w(2, 1), w(0, 2), w(1, 0);
+  }
+  return j;
+}
+
+namespace {
+
+PoseVector pose_difference(const PoseVector& a, const PoseVector& b) {
+  PoseVector d = a - b;
+  for (int k = 3; k < 6; ++k) d[k] = wrap_angle(d[k]);
+  return d;
+}
+
+}  // namespace
+
+PoseMatrix pose_map_jacobian(const std::function<PoseVector(const PoseVector&)>& f,
+                             const PoseVector& x, double h) {
+  PoseMatrix j;
+  for (int k = 0; k < 6; ++k) {
+    PoseVector up = x, down = x;
+    up[k] += h;
+    down[k] -= h;
+    j.col(k) = pose_difference(f(up), f(down)) / (2.0 * h);
+  }
+  return j;
+}
+
+namespace {
+
+// The source indices grouped into cubic blocks of side block_m, in a fixed order (sorted keys),
+// so that sums over blocks do not depend on a hash table's order.
+std::vector<std::vector<std::uint32_t>> blocks_of(const PointCloud& source, double block_m) {
+  using Key = std::tuple<long long, long long, long long, std::uint32_t>;
+  std::vector<Key> keys;
+  keys.reserve(source.size());
+  for (std::uint32_t i = 0; i < source.size(); ++i) {
+    const Eigen::Vector3d p = source.points[i].cast<double>() / block_m;
+    keys.emplace_back(static_cast<long long>(std::floor(p.x())),
+                      static_cast<long long>(std::floor(p.y())),
+                      static_cast<long long>(std::floor(p.z())), i);
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::vector<std::uint32_t>> blocks;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const bool same = i > 0 && std::get<0>(keys[i]) == std::get<0>(keys[i - 1]) &&
+                      std::get<1>(keys[i]) == std::get<1>(keys[i - 1]) &&
+                      std::get<2>(keys[i]) == std::get<2>(keys[i - 1]);
+    if (!same) blocks.emplace_back();
+    blocks.back().push_back(std::get<3>(keys[i]));
+  }
+  return blocks;
+}
+
+// Sums over every source point paired at the optimum (scaled space).
+struct FullPass {
+  PoseMatrix jtj = PoseMatrix::Zero();     // sum w J^T Omega J
+  PoseVector jte = PoseVector::Zero();     // sum w J^T Omega e
+  PoseMatrix blocks = PoseMatrix::Zero();  // sum over blocks of (block's jte)(block's jte)^T
+  double sum_rho = 0.0;                    // sum rho(e^T Omega e)
+  std::size_t pairs = 0;
+  std::size_t paired_blocks = 0;
+};
+
+// The unit normal of the reference at point i: stored, or the direction of least spread of its
+// kSurfaceNeighbors nearest points (kept in `cache`, NaN = not computed yet).
+Eigen::Vector3d surface_normal(const ReferenceIndex& reference, std::uint32_t i,
+                               std::vector<Eigen::Vector3f>& cache,
+                               std::vector<Neighbor>& neighbors) {
+  const PointCloud& ref = reference.cloud();
+  if (ref.has_normals()) return ref.normals[i].cast<double>();
+  if (cache.empty()) cache.assign(ref.size(), Eigen::Vector3f::Constant(NAN));
+  if (std::isnan(cache[i].x())) {
+    reference.k_nearest(ref.points[i], kSurfaceNeighbors, neighbors);
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& n : neighbors) mean += ref.points[n.index].cast<double>();
+    mean /= static_cast<double>(neighbors.size());
+    Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+    for (const auto& n : neighbors) {
+      const Eigen::Vector3d d = ref.points[n.index].cast<double>() - mean;
+      c += d * d.transpose();
+    }
+    cache[i] =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvectors().col(0).cast<float>();
+  }
+  return cache[i].cast<double>();
+}
+
+// Point-to-point pairs of a block with the information of the surface, n n^T.
+CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std::uint32_t>& block,
+                             const PoseVector& theta, std::vector<Eigen::Vector3f>& cache,
+                             std::vector<Neighbor>& neighbors) {
+  CostAccumulator cost(KernelType::none, 1.0, true);
+  const EulerPoseJacobian pose(theta);
+  const double k = p.scaling->scale();
+  const auto d_max_sq_m = static_cast<float>(p.max_distance * k * p.max_distance * k);
+  for (const std::uint32_t i : block) {
+    const Eigen::Vector3d s = p.scaling->to_scaled(p.source->points[i]);
+    const Eigen::Vector3d moved = pose.transform(s);
+    const auto nn = p.reference->nearest(p.scaling->to_metric(moved).cast<float>(), d_max_sq_m);
+    if (!nn) continue;
+    const Eigen::Vector3d n = surface_normal(*p.reference, nn->index, cache, neighbors);
+    const Eigen::Vector3d r = p.scaling->to_scaled(p.reference->cloud().points[nn->index]);
+    cost.add(pose.jacobian(s), moved - r, n * n.transpose());
+  }
+  return cost;
+}
+
+FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
+                   const PoseVector& theta) {
+  FullPass out;
+  std::vector<Eigen::Vector3f> cache;
+  std::vector<Neighbor> neighbors;
+  const bool surface = p.cost == CostType::point_to_point && p.reference != nullptr;
+  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+    const CostAccumulator c = surface ? surface_cost(p, block, theta, cache, neighbors)
+                                      : p.batch_cost(block, theta, true);
+    if (c.pairs() == 0) continue;
+    const PoseVector g = 2.0 * c.gradient(1);
+    out.jtj += 2.0 * c.hessian(1);
+    out.jte += g;
+    out.blocks += g * g.transpose();
+    out.sum_rho += 4.0 * c.cost(1);
+    out.pairs += c.pairs();
+    ++out.paired_blocks;
+  }
+  return out;
+}
+
+// sum w J^T Omega e over every source point with the run's own pairing and cost.
+PoseVector run_cost_gradient(const UncertaintyProblem& p, const UncertaintySettings& s,
+                             const PoseVector& theta) {
+  PoseVector sum = PoseVector::Zero();
+  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+    sum += 2.0 * p.batch_cost(block, theta, false).gradient(1);
+  }
+  return sum;
+}
+
+PoseVector prior_information() {
+  PoseVector d;
+  d << PoseVector::Constant(0.0);
+  d.head<3>().setConstant(1.0 / (kPriorTranslationStd * kPriorTranslationStd));
+  d.tail<3>().setConstant(1.0 / (kPriorRotationStd * kPriorRotationStd));
+  return d;
+}
+
+// kappa = tr(H^-1 S) / (6 sigma^2): the mean factor by which the block sandwich H^-1 S H^-1
+// exceeds the covariance of independent residuals sigma^2 H^-1 (1 when they are independent).
+double correlation_factor(const FullPass& f, double sigma2) {
+  const auto b = static_cast<double>(f.paired_blocks);
+  if (b <= 6.0) return 1.0;
+  // The block gradients sum to (nearly) zero at the optimum: B / (B - 6) undoes that bias.
+  const PoseMatrix s = f.blocks * (b / (b - 6.0));
+  PoseMatrix h = f.jtj;
+  h.diagonal() += sigma2 * prior_information();  // bounded in unconstrained directions
+  const double kappa = h.ldlt().solve(s).trace() / (6.0 * sigma2);
+  return std::isfinite(kappa) ? std::max(1.0, kappa) : 1.0;
+}
+
+// Normal deviates from a fully specified engine and Box-Muller, so that a seed gives the same
+// chain with any standard library (std::normal_distribution is implementation-defined).
+class Gaussian {
+ public:
+  explicit Gaussian(std::uint64_t seed) : engine_(seed ^ 0x9e3779b97f4a7c15ULL) {}
+  double operator()() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    const double u1 = (static_cast<double>(engine_() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+    const double u2 = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
+    const double radius = std::sqrt(-2.0 * std::log(u1));
+    spare_ = radius * std::sin(2.0 * std::numbers::pi * u2);
+    has_spare_ = true;
+    return radius * std::cos(2.0 * std::numbers::pi * u2);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+struct Posterior {
+  PoseVector theta_hat;  // scaled
+  PoseVector jte_hat;    // full-data sum w J^T Omega e at theta_hat
+  double inv_variance;   // 1 / (sigma^2 tau)
+  PoseMatrix precision;  // H / (sigma^2 tau) + prior
+};
+
+// Pre-conditioned SGLD (Li et al. 2016, eq. 4 without the Gamma term) on the energy
+// U = sum rho / (2 sigma^2 tau) - log prior, whose gradient is estimated on a mini-batch with
+// the control variate of the optimum: grad U(theta_hat) + N/m (g_batch(theta) -
+// g_batch(theta_hat)).
+std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                   const Posterior& post) {
+  const PoseVector prior = prior_information();
+  const double n_over_m = static_cast<double>(p.source->size()) /
+                          static_cast<double>(std::min(p.batch_size, p.source->size()));
+  // RMSProp's mean square starts at its stationary value, the curvature (E[(grad U)^2] = H_kk
+  // for a Gaussian), so no warm-up is spent on it.
+  PoseVector mean_square = post.precision.diagonal();
+  // eps such that the stiffest axis contracts by `step` per iteration: eps sqrt(H_kk) / 2.
+  const double eps = 2.0 * s.step / std::sqrt(mean_square.maxCoeff());
+  constexpr double kDecay = 0.99;  // Li et al. 2016
+  EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
+  Gaussian normal(p.seed);
+  std::vector<std::uint32_t> batch;
+  std::vector<PoseVector> samples;
+  samples.reserve(s.samples);
+  PoseVector theta = post.theta_hat;
+  const std::size_t iterations = s.burn_in + s.samples * s.thinning;
+  for (std::size_t it = 1; it <= iterations; ++it) {
+    sampler.next_batch(p.batch_size, batch);
+    const PoseVector at_theta = 2.0 * p.batch_cost(batch, theta, false).gradient(1);
+    const PoseVector at_hat = 2.0 * p.batch_cost(batch, post.theta_hat, false).gradient(1);
+    const PoseVector grad = (post.jte_hat + n_over_m * (at_theta - at_hat)) * post.inv_variance +
+                            prior.cwiseProduct(theta - p.theta_init);
+    mean_square = kDecay * mean_square + (1.0 - kDecay) * grad.cwiseProduct(grad);
+    const PoseVector g = mean_square.cwiseSqrt().cwiseInverse();
+    for (int k = 0; k < 6; ++k) {
+      theta[k] += -0.5 * eps * g[k] * grad[k] + std::sqrt(eps * g[k]) * normal();
+    }
+    if (it > s.burn_in && (it - s.burn_in) % s.thinning == 0) samples.push_back(theta);
+  }
+  return samples;
+}
+
+void fill_from_samples(const UncertaintyProblem& p, const std::vector<PoseVector>& chain,
+                       const PoseVector& reported_hat, RegistrationResult& result) {
+  result.samples.clear();
+  PoseVector mean_offset = PoseVector::Zero();
+  for (const PoseVector& theta : chain) {
+    result.samples.push_back(p.to_reported(theta));
+    mean_offset += pose_difference(result.samples.back(), reported_hat);
+  }
+  const auto n = static_cast<double>(chain.size());
+  mean_offset /= n;
+  result.sample_mean = reported_hat + mean_offset;
+  for (int k = 3; k < 6; ++k) result.sample_mean[k] = wrap_angle(result.sample_mean[k]);
+  PoseMatrix cov = PoseMatrix::Zero();
+  for (const PoseVector& sample : result.samples) {
+    const PoseVector d = pose_difference(sample, reported_hat) - mean_offset;
+    cov += d * d.transpose();
+  }
+  result.covariance = cov / std::max(1.0, n - 1.0);
+}
+
+}  // namespace
+
+PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                PoseVector theta_hat, RegistrationResult& result) {
+  if (s.method == UncertaintyType::none) return theta_hat;
+  const detail::Stopwatch clock;
+  // SGD stops within the noise ball of its mini-batch gradient, which is wider than the
+  // posterior: Gauss-Newton steps on every pair bring the estimate to the full-data optimum
+  // that the covariance describes (measured: docs/uncertainty.md).
+  FullPass full = full_pass(p, s, theta_hat);
+  for (int step = 0; step < kPolishSteps && full.pairs > 6; ++step) {
+    PoseMatrix h = full.jtj;
+    h.diagonal() += 1e-9 * h.trace() * PoseVector::Ones() + 1e-12 * prior_information();
+    theta_hat -= h.ldlt().solve(full.jte);
+    full = full_pass(p, s, theta_hat);
+  }
+  result.uncertainty_pairs = full.pairs;
+  const auto residuals = static_cast<double>(full.pairs * residuals_per_pair(p.cost));
+  const PoseVector reported_hat = p.to_reported(theta_hat);
+  if (residuals <= 6.0 || !(full.sum_rho > 0.0)) {
+    result.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
+    result.covariance_se3 = result.covariance;
+    result.message += "; no uncertainty: too few pairs at the optimum";
+    return theta_hat;
+  }
+  const double sigma2 = full.sum_rho / (residuals - 6.0);  // scaled units^2
+  result.residual_sigma_m = std::sqrt(sigma2) * p.scale_m;
+  result.correlation_factor = correlation_factor(full, sigma2);
+  const double tau = s.temper ? result.correlation_factor : 1.0;
+  Posterior post{theta_hat, full.jte, 1.0 / (sigma2 * tau), full.jtj / (sigma2 * tau)};
+  post.precision.diagonal() += prior_information();
+  if (s.method == UncertaintyType::laplace) {
+    const PoseMatrix jm = pose_map_jacobian(p.to_reported, theta_hat);
+    const PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
+    result.covariance = jm * cov * jm.transpose();
+  } else {
+    // The control variate needs the full-data gradient of the energy the chain samples, the
+    // run's own cost (point-to-point: not the surface information's).
+    if (p.cost == CostType::point_to_point) post.jte_hat = run_cost_gradient(p, s, theta_hat);
+    fill_from_samples(p, sgld_chain(p, s, post), reported_hat, result);
+  }
+  result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
+  const PoseMatrix js = se3_jacobian(reported_hat);
+  result.covariance_se3 = js * result.covariance * js.transpose();
+  result.uncertainty_ms = clock.elapsed_ms();
+  return theta_hat;
+}
+
+}  // namespace sgdicp
