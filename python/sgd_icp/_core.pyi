@@ -713,12 +713,13 @@ class ReferenceIndex:
         non_finite_dropped), or over an Open3D PointCloud (legacy or tensor; its normals too when
         it has them). normals: (N, 3) unit normals, one per row of points, default None; the
         point-to-plane cost uses them instead of estimating its own. leaf_size: points per
-        KD-tree leaf, default 10. cost: the cost the index will serve, default 'point-to-point';
+        KD-tree leaf, default 24. threads: threads of the build, default 1, 0 = every core (the
+        same tree for any count). cost: the cost the index will serve, default 'point-to-point';
         'point-to-plane' estimates the reference normals (unless given), 'plane-to-plane' the
         covariances, with `neighborhood` (NeighborhoodSettings, default None =
         NeighborhoodSettings()). The GIL is released during the build. The index never changes
-        afterwards: a registration whose method or cost needs normals or covariances the index
-        lacks raises InvalidInputError instead of adding them.
+        afterwards: the SGD methods estimate the normals or covariances they use during the run;
+        a batch method whose cost needs them raises InvalidInputError when the index lacks them.
         """
 
     @staticmethod
@@ -730,10 +731,11 @@ class ReferenceIndex:
         **overrides: Any,
     ) -> ReferenceIndex:
         """The index that register(source, points, method=method, settings=settings, **overrides)
-        builds for its reference (the cost's normals or covariances with the settings'
-        neighbourhood), for reuse over many sources with the same arguments: the results are the
-        same as passing points each time. points: an array or an Open3D PointCloud, as for
-        register(). Raises the errors of register() for the method, settings and keywords.
+        builds for its reference (for a batch method the cost's normals or covariances with the
+        settings' neighbourhood), for reuse over many sources with the same arguments: the
+        results are the same as passing points each time. points: an array or an Open3D
+        PointCloud, as for register(). Raises the errors of register() for the method, settings
+        and keywords.
         """
 
     def __len__(self) -> int: ...
@@ -1012,10 +1014,11 @@ def register(
         scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True), record_trace
-        (False), uncertainty (UncertaintyType.none), uncertainty_samples (200, [2, 1000000]),
-        burn_in (50, [0, 10000000]), thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]),
-        temper (True), block_size (Distance.scaled(0.1)).
+        check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True),
+        record_trace (False), uncertainty (UncertaintyType.none),
+        uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
+        thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), temper (True),
+        block_size (Distance.scaled(0.1)).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in

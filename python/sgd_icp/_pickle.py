@@ -19,6 +19,7 @@ _CLASSES = (
     _core.ConvergenceSettings,
     _core.RefinementSettings,
     _core.NeighborhoodSettings,
+    _core.UncertaintySettings,
 )
 
 
