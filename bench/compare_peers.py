@@ -4,7 +4,7 @@
 usage: bench/compare_peers.py [PAIRS_FILE ...] [--reps 5] [--quick] [--out DIR] [options]
 
 Runs every method on the same pairs (default: every ../shared/data/pairs/*.txt next to the
-repository), alternating the methods pair by pair (the order rotates each time) for --reps
+repository, plus the 7-Scenes pairs of bench/make_sevenscenes_pairs.py when generated), alternating the methods pair by pair (the order rotates each time) for --reps
 rounds, and writes per-run rows (runs.csv), a summary (summary.csv) and Markdown tables
 (report.md) to --out. Progress goes to stderr, the report to stdout. Needs the sgd_icp package
 (`pip install .`); the runners are its module sgd_icp.peers.
@@ -49,7 +49,7 @@ except ImportError as e:
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-DEFAULT_METHODS = ("sgdicp,sgdicp_dmax0.5m,sg_icp_full_1t,sg_gicp_full_1t,sg_icp_vox_1t,sg_gicp_vox_1t,"
+DEFAULT_METHODS = ("sgdicp,sgdicp_dmax0.5m,sgdicp_plane,sgdicp_gicp,sg_icp_full_1t,sg_gicp_full_1t,sg_icp_vox_1t,sg_gicp_vox_1t,"
                    "o3d_p2p_1t,o3d_p2plane_1t,pcl_icp_1t,sg_kdtree_build")
 ALL_THREADS_METHODS = ",sg_icp_full_{nt}t,sg_gicp_full_{nt}t,sg_icp_vox_{nt}t,sg_gicp_vox_{nt}t"
 QUICK_METHODS = "sgdicp,sg_icp_full_1t,sg_gicp_vox_1t,o3d_p2p_1t,pcl_icp_1t,sg_kdtree_build"
@@ -147,8 +147,21 @@ def select_methods(args, methods: list[peers.Method]) -> list[peers.Method] | No
     return [m for m in chosen if m.available]
 
 
+def default_pairs_files() -> list[str]:
+    """Every ../shared/data/pairs/*.txt, and the 7-Scenes pairs of bench/make_sevenscenes_pairs.py
+    when they have been generated (../generated/sevenscenes_redkitchen or $SGDICP_GENERATED_DATA)."""
+    files = sorted(glob.glob(os.path.join(REPO, "..", "shared", "data", "pairs", "*.txt")))
+    generated = os.environ.get("SGDICP_GENERATED_DATA") or os.path.join(REPO, "..", "generated", "sevenscenes_redkitchen")
+    seven = os.path.join(generated, "sevenscenes_redkitchen.txt")
+    if os.path.isfile(seven):
+        files.append(seven)
+    else:
+        log(f"[setup] no 7-Scenes pairs at {seven}: run bench/make_sevenscenes_pairs.py to include them")
+    return files
+
+
 def load_pairs(args) -> list[peers.Pair]:
-    pairs_files = args.pairs or sorted(glob.glob(os.path.join(REPO, "..", "shared", "data", "pairs", "*.txt")))
+    pairs_files = args.pairs or default_pairs_files()
     pairs: list[peers.Pair] = []
     for pf in pairs_files:
         ps = peers.read_pairs(pf)

@@ -41,6 +41,7 @@ DEFAULT_VOXEL_M = {
     "pcl_kinect_frames": 0.02,
     "eth_kinect_map_moved_copies": 0.02,
     "pcl_bunny": 0.002,
+    "sevenscenes_redkitchen": 0.02,  # Kinect frames (bench/make_sevenscenes_pairs.py)
 }
 
 
@@ -110,6 +111,10 @@ def build_methods(settings: PeerSettings, sgdicp: str | None, pcl_adapter: str |
                cli_ok, cli_why),
         Method("sgdicp_dmax0.5m", "sgd-icp", "sgd-icp defaults but d_max = 0.5 m", "1", "cli",
                ["-d", str(settings.max_distance_m), "--max-distance-unit", "m"], cli_ok, cli_why),
+        Method("sgdicp_plane", "sgd-icp", "sgd-icp --method sgd-plane (normals on first use)", "1",
+               "cli", ["--method", "sgd-plane"], cli_ok, cli_why),
+        Method("sgdicp_gicp", "sgd-icp", "sgd-icp --method sgd-gicp (covariances on first use)",
+               "1", "cli", ["--method", "sgd-gicp"], cli_ok, cli_why),
     ]
     ok, why = module_available("small_gicp", "small_gicp", install)
     for reg, label in (("ICP", "icp"), ("GICP", "gicp")):
