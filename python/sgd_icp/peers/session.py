@@ -115,6 +115,12 @@ def build_methods(settings: PeerSettings, sgdicp: str | None, pcl_adapter: str |
                "cli", ["--method", "sgd-plane"], cli_ok, cli_why),
         Method("sgdicp_gicp", "sgd-icp", "sgd-icp --method sgd-gicp (covariances on first use)",
                "1", "cli", ["--method", "sgd-gicp"], cli_ok, cli_why),
+        Method("sgdicp_plane_vox", "sgd-icp",
+               "sgd-icp --method sgd-plane on the peers' voxel grid (--voxel-size, timed)", "1",
+               "cli", ["--method", "sgd-plane", "--voxel-size", "{voxel}"], cli_ok, cli_why),
+        Method("sgdicp_gicp_vox", "sgd-icp",
+               "sgd-icp --method sgd-gicp on the peers' voxel grid (--voxel-size, timed)", "1",
+               "cli", ["--method", "sgd-gicp", "--voxel-size", "{voxel}"], cli_ok, cli_why),
     ]
     ok, why = module_available("small_gicp", "small_gicp", install)
     for reg, label in (("ICP", "icp"), ("GICP", "gicp")):
@@ -229,7 +235,10 @@ class Session:
                     s.voxel_for(pair.pairs_file))
 
     def _run_cli(self, method: Method, pair: Pair, rep: int) -> Outcome:
-        run = run_bench(self.sgdicp, [pair], ["--seed", str(2019 + rep)] + list(method.spec),
+        # "{voxel}" in a CLI method's arguments: the pairs file's voxel size, the peers' own.
+        voxel = str(self.settings.voxel_for(pair.pairs_file))
+        args = [a.replace("{voxel}", voxel) for a in method.spec]
+        run = run_bench(self.sgdicp, [pair], ["--seed", str(2019 + rep)] + args,
                         self._tmp.name, self.settings.timeout_s, peak_rss=True)
         if run.status == "timeout":
             return Outcome(status="timeout", time_ms=self.settings.timeout_s * 1e3, note=run.note,
