@@ -28,5 +28,5 @@
 #include "sgdicp/trajectory_io.hpp"
 #include "sgdicp/trajectory_metrics.hpp"
 #include "sgdicp/transform_io.hpp"
-#include "sgdicp/voxel_map.hpp"
 #include "sgdicp/uncertainty.hpp"
+#include "sgdicp/voxel_map.hpp"

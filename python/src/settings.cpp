@@ -266,7 +266,8 @@ std::string repr(const SgdSettings& s) {
              "convergence={}, refinement={}, cost=CostType.{}, kernel=KernelType.{}, "
              "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
              "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
-             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r}, uncertainty={})")
+             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r}, "
+             "uncertainty={})")
       .format(s.batch_size, repr(s.max_correspondence_distance), repr(s.optimizer),
               repr(s.convergence), repr(s.refinement), cost_name(s.cost), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
