@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <tuple>
 
@@ -11,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "point_surfaces.hpp"
 #include "sgdicp/sampler.hpp"
 #include "solver_support.hpp"
 
@@ -86,34 +88,9 @@ struct FullPass {
   std::size_t paired_blocks = 0;
 };
 
-// The unit normal of the reference at point i: stored, or the direction of least spread of its
-// kSurfaceNeighbors nearest points (kept in `cache`, NaN = not computed yet).
-Eigen::Vector3d surface_normal(const ReferenceIndex& reference, std::uint32_t i,
-                               std::vector<Eigen::Vector3f>& cache,
-                               std::vector<Neighbor>& neighbors) {
-  const PointCloud& ref = reference.cloud();
-  if (ref.has_normals()) return ref.normals[i].cast<double>();
-  if (cache.empty()) cache.assign(ref.size(), Eigen::Vector3f::Constant(NAN));
-  if (std::isnan(cache[i].x())) {
-    reference.k_nearest(ref.points[i], kSurfaceNeighbors, neighbors);
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& n : neighbors) mean += ref.points[n.index].cast<double>();
-    mean /= static_cast<double>(neighbors.size());
-    Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
-    for (const auto& n : neighbors) {
-      const Eigen::Vector3d d = ref.points[n.index].cast<double>() - mean;
-      c += d * d.transpose();
-    }
-    cache[i] =
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvectors().col(0).cast<float>();
-  }
-  return cache[i].cast<double>();
-}
-
 // Point-to-point pairs of a block with the information of the surface, n n^T.
 CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std::uint32_t>& block,
-                             const PoseVector& theta, std::vector<Eigen::Vector3f>& cache,
-                             std::vector<Neighbor>& neighbors) {
+                             const PoseVector& theta, detail::PointSurfaces& surfaces) {
   CostAccumulator cost(KernelType::none, 1.0, true);
   const EulerPoseJacobian pose(theta);
   const double k = p.scaling->scale();
@@ -123,7 +100,9 @@ CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std:
     const Eigen::Vector3d moved = pose.transform(s);
     const auto nn = p.reference->nearest(p.scaling->to_metric(moved).cast<float>(), d_max_sq_m);
     if (!nn) continue;
-    const Eigen::Vector3d n = surface_normal(*p.reference, nn->index, cache, neighbors);
+    // The reference's own normal, or one of its kSurfaceNeighbors nearest points (zero, no
+    // information, where they span no plane).
+    const Eigen::Vector3d n = surfaces.normal(nn->index).cast<double>();
     const Eigen::Vector3d r = p.scaling->to_scaled(p.reference->cloud().points[nn->index]);
     cost.add(pose.jacobian(s), moved - r, n * n.transpose());
   }
@@ -133,12 +112,12 @@ CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std:
 FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
                    const PoseVector& theta) {
   FullPass out;
-  std::vector<Eigen::Vector3f> cache;
-  std::vector<Neighbor> neighbors;
   const bool surface = p.cost == CostType::point_to_point && p.reference != nullptr;
+  std::optional<detail::PointSurfaces> surfaces;
+  if (surface) surfaces.emplace(*p.reference, NeighborhoodSettings{.k = kSurfaceNeighbors});
   for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
-    const CostAccumulator c = surface ? surface_cost(p, block, theta, cache, neighbors)
-                                      : p.batch_cost(block, theta, true);
+    const CostAccumulator c =
+        surface ? surface_cost(p, block, theta, *surfaces) : p.batch_cost(block, theta, true);
     if (c.pairs() == 0) continue;
     const PoseVector g = 2.0 * c.gradient(1);
     out.jtj += 2.0 * c.hessian(1);
