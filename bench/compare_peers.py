@@ -28,6 +28,12 @@ Budget (default ~12 min on a 2-core VM): a method slower than --slow-ms (1 s) on
 first round runs only --slow-reps (2) rounds there, slower than --very-slow-ms (5 s) only one.
 small_gicp's multi-threaded variants only with --all-threads. See docs/performance.md for the
 results and how to read them.
+
+--pareto adds a "Pareto" section to report.md: per pairs file, each method's median time against
+its median errors and success rate, the methods no other one dominates (faster or as fast, at
+least as successful, at least as precise in rotation) and what each sgd-icp method dominates;
+and a plot pareto.png (with matplotlib). --pareto-from DIR makes both from an earlier run's
+DIR/runs.csv without running anything (this alone works without the sgd_icp package).
 """
 from __future__ import annotations
 
@@ -40,12 +46,15 @@ import platform
 import statistics
 import sys
 import time
+from typing import NamedTuple
 
 try:
     from sgd_icp import peers
-except ImportError as e:
-    sys.exit(f"bench/compare_peers.py needs the sgd_icp Python package ({e}): "
-             "run `pip install .` in the repository (docs/python.md)")
+    NEEDS_PACKAGE = None
+except ImportError as e:  # only --pareto-from (and the pure functions of this file) work without it
+    peers = None
+    NEEDS_PACKAGE = (f"bench/compare_peers.py needs the sgd_icp Python package ({e}): "
+                     "run `pip install .` in the repository (docs/python.md)")
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -118,7 +127,32 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--timeout", type=float, default=d.timeout_s, metavar="SECONDS", help=f"a registration (a peer's, or a sgdicp CLI process) longer than this is stopped, recorded as 'timeout' and not retried on that pair (default {d.timeout_s:g})")
     ap.add_argument("--max-pairs", type=int, default=0, help="use at most this many pairs per pairs file (0 = all)")
     ap.add_argument("--no-install", dest="install", action="store_false", help="do not pip install missing peers")
+    ap.add_argument("--pareto", action="store_true", help=PARETO_HELP)
+    ap.add_argument("--pareto-from", metavar="DIR", default=None, help=PARETO_FROM_HELP)
     return ap
+
+
+PARETO_HELP = "also append the Pareto section (per pairs file) to report.md and plot pareto.png in --out (default: off)"
+PARETO_FROM_HELP = ("run nothing: append the Pareto section of an earlier run's DIR/runs.csv (or, without it, "
+                    "DIR/summary.csv) to DIR/report.md and plot DIR/pareto.png (default: off)")
+# peers.SUCCESS_THRESHOLDS[0], the default of --success when --pareto-from runs without the package
+# (tests/python/test_compare_peers_pareto.py checks that the two agree).
+SUCCESS_WITHOUT_PACKAGE = (0.05, 1.0)
+
+
+def build_pareto_parser() -> argparse.ArgumentParser:
+    """The options of --pareto-from alone: what main() parses when the sgd_icp package is missing."""
+    ap = argparse.ArgumentParser(description="The Pareto section and plot of an earlier run of bench/compare_peers.py "
+                                             "(the sgd_icp package is not installed: nothing else can run).")
+    ap.add_argument("--pareto-from", metavar="DIR", required=True, help=PARETO_FROM_HELP)
+    ap.add_argument("--success", default="{:g},{:g}".format(*SUCCESS_WITHOUT_PACKAGE),
+                    help="success threshold TRANS_M,ROT_DEG (default {:g},{:g}, the CLI's)".format(*SUCCESS_WITHOUT_PACKAGE))
+    return ap
+
+
+def wants_pareto_from(argv: list[str]) -> bool:
+    """Whether the command line asks for --pareto-from (checked before the sgd_icp package is needed)."""
+    return any(a == "--pareto-from" or a.startswith("--pareto-from=") for a in argv)
 
 
 def settings_of(args: argparse.Namespace) -> peers.PeerSettings:
@@ -223,7 +257,15 @@ def run_rounds(args, session: peers.Session, pairs: list[peers.Pair], active: li
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if peers is None:
+        if not wants_pareto_from(argv):
+            sys.exit(NEEDS_PACKAGE)
+        args = build_pareto_parser().parse_args(argv)
+        return pareto_from(args.pareto_from, parse_success(args.success))
     args = build_parser().parse_args(argv)
+    if args.pareto_from:
+        return pareto_from(args.pareto_from, parse_success(args.success))
     if args.quick:
         args.reps = args.reps or 2
         args.max_pairs = args.max_pairs or 1
@@ -257,10 +299,16 @@ def main(argv=None) -> int:
     os.replace(live_csv, os.path.join(args.out, "runs.csv"))
 
     report = make_report(rows, active, pairs, args, time.time() - t_start)
+    plotted = False
+    if args.pareto:
+        success = parse_success(args.success)
+        stats = dataset_stats(rows, success)
+        report = with_pareto_section(report, pareto_section(stats, success))
+        plotted = plot_pareto(stats, os.path.join(args.out, "pareto.png"))
     with open(os.path.join(args.out, "report.md"), "w") as f:
         f.write(report)
     print(report)
-    log(f"[done] {args.out}/runs.csv, summary.csv, report.md")
+    log(f"[done] {args.out}/runs.csv, summary.csv, report.md" + (", pareto.png" if plotted else ""))
     return 0
 
 
@@ -379,6 +427,221 @@ def make_report(rows, methods, pairs, args, elapsed) -> str:
             w.writeheader()
             w.writerows(summary_rows)
     return "\n".join(lines) + "\n"
+
+
+# --- Pareto: median time against median errors and success, per pairs file (--pareto, --pareto-from)
+
+SGDICP_PREFIX = "sgdicp"  # the sgd-icp methods: the ones whose dominated methods are listed
+PARETO_MARKERS = "os^vDP*X<>hpd8H"
+
+
+class MethodStats(NamedTuple):
+    """One method on one pairs file: medians over all its runs there (time: ok and timed-out runs,
+    a timeout counting with its limit; errors: ok runs) and the share of its runs that succeed.
+    (A NamedTuple, not a dataclass: the tests load this file without registering it as a module.)"""
+
+    method: str
+    time_ms: float
+    t_err_m: float
+    r_err_deg: float
+    success: float  # 0..1
+    runs: int = 0
+
+
+def parse_success(text: str) -> tuple[float, float]:
+    """TRANS_M,ROT_DEG of --success."""
+    t, r = (float(x) for x in text.split(","))
+    return t, r
+
+
+def _worst_if_nan(x: float) -> float:
+    """A missing median (no run to take it from) counts as the worst value."""
+    return x if x is not None and math.isfinite(x) else math.inf
+
+
+def dominates(a: MethodStats, b: MethodStats) -> bool:
+    """Whether a dominates b: a's median time <= b's, its success >= b's and its median rotation
+    error <= b's, at least one of the three strictly. A missing time or error counts as infinite."""
+    ta, tb = _worst_if_nan(a.time_ms), _worst_if_nan(b.time_ms)
+    ra, rb = _worst_if_nan(a.r_err_deg), _worst_if_nan(b.r_err_deg)
+    if not (ta <= tb and a.success >= b.success and ra <= rb):
+        return False
+    return ta < tb or a.success > b.success or ra < rb
+
+
+def dominated_by(stats: list[MethodStats]) -> dict[str, list[str]]:
+    """For each method of one pairs file, the methods that dominate it (in the order of stats)."""
+    return {b.method: [a.method for a in stats if a is not b and dominates(a, b)] for b in stats}
+
+
+def pareto_front(stats: list[MethodStats]) -> list[str]:
+    """The methods of one pairs file that no other method dominates, in the order of stats."""
+    by = dominated_by(stats)
+    return [s.method for s in stats if not by[s.method]]
+
+
+def dataset_stats(rows: list[dict], success: tuple[float, float]) -> dict[str, list[MethodStats]]:
+    """Per pairs file (sorted), each registration method's MethodStats over the rows of runs.csv
+    (the build-only methods left out), fastest first: the medians and the success of the report's
+    per-pairs-file tables (summary.csv). success = (translation m, rotation deg) thresholds."""
+    succ_t, succ_r = success
+    runs: dict[str, dict[str, list[dict]]] = {}
+    for r in rows:
+        if r.get("family") == "build-only":
+            continue
+        runs.setdefault(r["pairs_file"], {}).setdefault(r["method"], []).append(r)
+    out = {}
+    for g in sorted(runs):
+        stats = []
+        for m, rs in runs[g].items():
+            good = [r for r in rs if r["status"] == "ok"]
+            n_ok = sum(r["translation_error_m"] < succ_t and r["rotation_error_deg"] < succ_r for r in good)
+            stats.append(MethodStats(method=m, runs=len(rs), success=n_ok / len(rs),
+                                     time_ms=median([r["time_ms"] for r in rs if r["status"] in ("ok", "timeout")]),
+                                     t_err_m=median([r["translation_error_m"] for r in good]),
+                                     r_err_deg=median([r["rotation_error_deg"] for r in good])))
+        out[g] = sorted(stats, key=lambda s: (_worst_if_nan(s.time_ms), s.method))
+    return out
+
+
+def read_csv(path: str) -> list[dict]:
+    """The rows of a CSV file of this script, the numbers as floats (an empty cell is NaN)."""
+    def value(v):
+        try:
+            return float(v) if v != "" else float("nan")
+        except ValueError:
+            return v
+    with open(path, newline="") as f:
+        return [{k: value(v) if k not in ("pairs_file", "method", "status", "family", "group") else v
+                 for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def summary_stats(summary: list[dict]) -> dict[str, list[MethodStats]]:
+    """dataset_stats() of the rows of summary.csv (its success is the run's --success)."""
+    out: dict[str, list[MethodStats]] = {}
+    for r in summary:
+        if r["group"] == "ALL":
+            continue
+        out.setdefault(r["group"], []).append(MethodStats(
+            method=r["method"], time_ms=r["median_time_ms"], t_err_m=r["median_t_err_m"],
+            r_err_deg=r["median_r_err_deg"], success=r["success"], runs=int(r["runs"])))
+    return {g: sorted(s, key=lambda x: (_worst_if_nan(x.time_ms), x.method)) for g, s in sorted(out.items())}
+
+
+def pareto_section(stats: dict[str, list[MethodStats]], success: tuple[float, float] | None) -> str:
+    """The Markdown section "Pareto" of dataset_stats(): per pairs file a table of the methods and
+    a line per sgd-icp method with the methods it dominates. success None: thresholds unknown."""
+    lines = ["## Pareto\n"]
+    out = lines.append
+    thresholds = (f"translation < {success[0]:g} m and rotation < {success[1]:g} deg" if success
+                  else "the run's --success thresholds (from summary.csv)")
+    out("Per pairs file: a method dominates another when its median time is at most the other's, its success "
+        "at least the other's and its median rotation error at most the other's, one of them strictly (the "
+        "translation error is shown, not compared). Front: dominated by no other method. Medians over every run "
+        "on the pairs file (time: ok and timed-out runs; errors: ok runs); success: "
+        f"{thresholds}. No median (no ok run) counts as the worst.")
+    for g, st in stats.items():
+        by = dominated_by(st)
+        out(f"\n### {g}\n")
+        out("| method | median time [ms] | median t err [mm] | median r err [°] | success | Pareto front | dominated by |")
+        out("| --- | ---: | ---: | ---: | ---: | --- | --- |")
+        for s in st:
+            out(f"| {s.method} | {fmt(s.time_ms)} | {fmt(s.t_err_m * 1000)} | {fmt(s.r_err_deg)} | "
+                f"{100 * s.success:.0f} % | {'no' if by[s.method] else 'yes'} | {', '.join(by[s.method]) or '–'} |")
+        out("")
+        sgd = [s.method for s in st if s.method.startswith(SGDICP_PREFIX)]
+        for m in sgd:
+            beaten = [b for b, a in by.items() if m in a]
+            out(f"- {m} dominates " + (", ".join(beaten) if beaten else "nothing"))
+        if not sgd:
+            out("- no sgd-icp method on this pairs file")
+    return "\n".join(lines) + "\n"
+
+
+def with_pareto_section(report: str, section: str) -> str:
+    """report with its "## Pareto" section (up to the next level-2 heading) replaced by section, or
+    section appended: a repeated --pareto-from does not add a second one."""
+    lines = report.splitlines()
+    if "## Pareto" in lines:
+        start = lines.index("## Pareto")
+        end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("## ")), len(lines))
+        lines = lines[:start] + lines[end:]
+    text = "\n".join(lines).rstrip("\n")
+    return (text + "\n\n" if text else "") + section
+
+
+def plot_pareto(stats: dict[str, list[MethodStats]], path: str) -> bool:
+    """pareto.png: median time (log x) against median rotation error (log y), a marker shape per
+    method, a colour per pairs file, filled on the pairs file's front; False (and a note on stderr)
+    without matplotlib. Points without a positive time and error are left out."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.lines import Line2D
+    except ImportError:
+        log("plot skipped: matplotlib not installed")
+        return False
+    methods = list(dict.fromkeys(s.method for st in stats.values() for s in st))
+    marker = {m: PARETO_MARKERS[i % len(PARETO_MARKERS)] for i, m in enumerate(methods)}
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colour = {g: colours[i % len(colours)] for i, g in enumerate(stats)}
+    fig, ax = plt.subplots(figsize=(8, 5))
+    left_out = []
+    for g, st in stats.items():
+        front = set(pareto_front(st))
+        for s in st:
+            if not (s.time_ms > 0 and s.r_err_deg > 0):  # also False for NaN
+                left_out.append(f"{g}/{s.method}")
+                continue
+            ax.plot([s.time_ms], [s.r_err_deg], linestyle="none", marker=marker[s.method], markersize=7,
+                    markeredgecolor=colour[g], markerfacecolor=colour[g] if s.method in front else "none")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("median time [ms]")
+    ax.set_ylabel("median rotation error [°]")
+    ax.set_title("Time vs rotation error per pairs file (filled: on its Pareto front)")
+    ax.grid(True, which="both", alpha=0.3)
+    handles = [Line2D([], [], linestyle="none", marker=marker[m], color="0.3", markerfacecolor="none",
+                      label=m) for m in methods]
+    handles += [Line2D([], [], linestyle="none", marker="s", color=colour[g], label=g) for g in stats]
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0,
+              fontsize="small", frameon=False)
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+    plt.close(fig)
+    if left_out:
+        log(f"[pareto] not plotted (no positive time or rotation error): {', '.join(left_out)}")
+    return True
+
+
+def pareto_from(folder: str, success: tuple[float, float]) -> int:
+    """--pareto-from: the Pareto section of folder/runs.csv (else folder/summary.csv, whose success
+    is the run's) appended to folder/report.md (made if missing) and printed, and folder/pareto.png."""
+    runs_csv, summary_csv = os.path.join(folder, "runs.csv"), os.path.join(folder, "summary.csv")
+    if os.path.isfile(runs_csv):
+        stats = dataset_stats(read_csv(runs_csv), success)
+    elif os.path.isfile(summary_csv):
+        log(f"[pareto] no {runs_csv}: the medians and success of {summary_csv}")
+        stats, success = summary_stats(read_csv(summary_csv)), None
+    else:
+        log(f"[pareto] neither {runs_csv} nor {summary_csv}")
+        return 2
+    if not stats:
+        log(f"[pareto] no registration runs in {folder}")
+        return 2
+    section = pareto_section(stats, success)
+    report_md = os.path.join(folder, "report.md")
+    report = ""
+    if os.path.isfile(report_md):
+        with open(report_md) as f:
+            report = f.read()
+    with open(report_md, "w") as f:
+        f.write(with_pareto_section(report, section))
+    print(section)
+    plotted = plot_pareto(stats, os.path.join(folder, "pareto.png"))
+    log(f"[done] {report_md} (Pareto section)" + (f", {folder}/pareto.png" if plotted else ""))
+    return 0
+
 
 
 if __name__ == "__main__":
