@@ -13,7 +13,6 @@ namespace sgdicp::cli {
 namespace {
 
 // CLI-only options: downsampling before the registration (metres; a fraction of the points).
-constexpr ValueRange kVoxelSize{1e-6, 1e6};
 constexpr ValueRange kRandomRatio{0.0, 1.0, true, false};
 
 [[noreturn]] void bad_value(std::string_view option, std::string_view text, std::string_view what) {
@@ -170,16 +169,13 @@ void add_method_options(CLI::App& app, SettingsOptions& o, bool several) {
   }
   if (several) help += "; several separated by commas are compared in one run";
   app.add_option("--method", o.method, help + " [default: " + o.method + "]");
-  app.add_option("--voxel-size", o.voxel_size,
-                 "Downsample both clouds to one point per voxel of this size, metres, in " +
-                     kVoxelSize.to_string() + ", before registering (timed) [default: off]");
   app.add_option("--random-ratio", o.random_ratio,
                  "Keep this random fraction of each cloud's points before registering (seeded "
                  "by --seed), in " +
                      kRandomRatio.to_string() + " [default: off]");
 }
 
-void add_settings_options(CLI::App& app, SettingsOptions& o) {
+void add_settings_options(CLI::App& app, SettingsOptions& o, bool with_voxel_grid) {
   app.add_option("--preset", o.preset,
                  "Base settings of the SGD methods that the options below override: 'default' "
                  "(the best measured: paper coarse phase, then refinement) or 'paper' (m = 160, "
@@ -198,6 +194,7 @@ void add_settings_options(CLI::App& app, SettingsOptions& o) {
   for (const auto& s : sgd_settings_table()) {
     if (s.keyword_only) continue;
     const std::string name(s.name);
+    if (!with_voxel_grid && (name == "voxel-size" || name == "downsample-to")) continue;
     // The paper's symbols as short options: -m for the mini-batch size, -d for d_max.
     const std::string short_name = name == "batch-size"     ? "-m,"
                                    : name == "max-distance" ? "-d,"
@@ -233,8 +230,7 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
     apply(m.sgd, s, value);
     if (const auto* b = find_batch_setting(s.name)) apply(m.batch, *b, value);
   }
-  if (method.cost) m.sgd.cost = m.batch.cost = *method.cost;
-  m.voxel_size = preprocessing_option(o.voxel_size, "--voxel-size", kVoxelSize, " m");
+  apply_method_cost(method, m.sgd, m.batch);
   m.random_ratio = preprocessing_option(o.random_ratio, "--random-ratio", kRandomRatio, "");
   m.sgd.validate(SettingNames::cli);
   m.batch.validate(SettingNames::cli);
@@ -249,25 +245,21 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
 MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointCloud& reference,
                      const Eigen::Matrix4d& T_init, bool record_trace) {
   const auto start = std::chrono::steady_clock::now();
-  const auto reduce = [&](const PointCloud& cloud) {
-    PointCloud out = m.voxel_size ? voxel_downsample(cloud, *m.voxel_size) : cloud;
-    if (m.random_ratio) out = random_downsample_ratio(out, *m.random_ratio, m.sgd.seed);
-    return out;
-  };
-  const bool reduced = m.voxel_size || m.random_ratio;
   std::optional<PointCloud> small_source;
-  if (reduced) small_source = reduce(source);
+  std::optional<PointCloud> small_reference;
+  if (m.random_ratio) {
+    small_source = random_downsample_ratio(source, *m.random_ratio, m.sgd.seed);
+    small_reference = random_downsample_ratio(reference, *m.random_ratio, m.sgd.seed);
+  }
   const PointCloud& src = small_source ? *small_source : source;
-  const KdTreeSettings tree{.num_threads = m.stochastic ? m.sgd.num_threads : m.batch.num_threads};
-  ReferenceIndex index(reduced ? reduce(reference) : reference, tree);
-  // align() estimates the normals or covariances of its cost for the pairs it uses; the batch
-  // solver needs them for every reference point beforehand.
-  if (!m.stochastic) prepare_reference(index, m.batch.cost, m.batch.neighborhood);
+  PointCloud ref = small_reference ? std::move(*small_reference) : reference;
+  // The reference on the settings' voxel grid, with its KD-tree; a batch method also needs every
+  // reference normal or covariance beforehand (align() estimates those of the pairs it uses).
+  ReferenceIndex index = m.stochastic ? reference_index_for(std::move(ref), m.sgd)
+                                      : reference_index_for(std::move(ref), m.batch);
   MethodRun run;
   run.prepare_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  run.source_points = src.size();
-  run.reference_points = index.size();
   if (m.stochastic) {
     SgdSettings s = m.sgd;
     s.record_trace = record_trace;
@@ -277,6 +269,8 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
     b.record_trace = record_trace;
     run.result = align_batch(src, index, b, T_init);
   }
+  run.source_points = run.result.source_points;
+  run.reference_points = run.result.reference_points;
   return run;
 }
 

@@ -22,16 +22,18 @@ struct SettingsOptions {
   std::string method = "sgd";
   std::string max_distance_unit = "scaled";
   std::optional<std::string> preconditioner;
-  std::optional<std::string> voxel_size;
   std::optional<std::string> random_ratio;
   /// Setting name (settings.hpp's table) -> the text given for it.
   std::map<std::string, std::string, std::less<>> values;
 };
 
-/// --method (one, or with `several` a comma-separated list) and the preprocessing options.
+/// --method (one, or with `several` a comma-separated list) and --random-ratio (the voxel grid
+/// is a setting of the table: --voxel-size, --downsample-to).
 void add_method_options(CLI::App& app, SettingsOptions& o, bool several);
-/// --preset, --max-distance-unit, --preconditioner and one option per setting of the table.
-void add_settings_options(CLI::App& app, SettingsOptions& o);
+/// --preset, --max-distance-unit, --preconditioner and one option per setting of the table
+/// (without --voxel-size and --downsample-to unless with_voxel_grid: odometry thins its frames
+/// and map itself).
+void add_settings_options(CLI::App& app, SettingsOptions& o, bool with_voxel_grid = true);
 
 /// One method of --method with all its settings resolved.
 struct MethodSpec {
@@ -39,7 +41,6 @@ struct MethodSpec {
   bool stochastic = true;
   SgdSettings sgd;
   BatchSettings batch;
-  std::optional<double> voxel_size;
   std::optional<double> random_ratio;
 };
 
@@ -49,7 +50,9 @@ struct MethodSpec {
 
 struct MethodRun {
   RegistrationResult result;
-  double prepare_ms = 0.0;  ///< downsampling + KD-tree build + reference normals/covariances
+  /// Random thinning + the reference's voxel grid + KD-tree build + batch methods' reference
+  /// normals/covariances (the source's grid is inside the registration's time_ms).
+  double prepare_ms = 0.0;
   std::size_t source_points = 0;
   std::size_t reference_points = 0;
 };

@@ -289,7 +289,7 @@ void add_odometry_command(CLI::App& app) {
                   "Registration step: " + method_list(", ") +
                       " (methods of `sgdicp register`) "
                       "[default: sgd]");
-  add_settings_options(*cmd, o->settings);
+  add_settings_options(*cmd, o->settings, /*with_voxel_grid=*/false);
   add_depth_options(*cmd, o->depth);
   cmd->callback([o] { run(*o); });
 }

@@ -117,8 +117,6 @@ void run(const RegisterOptions& o) {
     nlohmann::json j = result_to_json(result);
     j["build_ms"] = build_ms;
     j["method"] = method.name;
-    j["source_points"] = run.source_points;
-    j["reference_points"] = run.reference_points;
     if (T_gt) {
       j["translation_error_m"] = translation_error(result.T_reference_source, *T_gt);
       j["rotation_error_euler_rad"] = rotation_error_euler_sum(result.T_reference_source, *T_gt);
@@ -136,14 +134,21 @@ void run(const RegisterOptions& o) {
             << ", points processed: " << result.points_processed << " (" << std::fixed
             << std::setprecision(2)
             << static_cast<double>(result.points_processed) / static_cast<double>(run.source_points)
-            << " passes over " << source.size() << " source points)\n"
+            << " passes over " << result.source_points << " source points)\n"
+            << "clouds: " << result.source_points << " source and " << result.reference_points
+            << " reference points registered"
+            << (result.voxel_size_m > 0.0
+                    ? " (voxel grid " + format_number(result.voxel_size_m) + " m, from " +
+                          std::to_string(source.size()) + " source points)"
+                    : std::string(" (every point)"))
+            << "\n"
             << "inliers: " << result.inliers << " of " << result.evaluated_points << " ("
             << std::setprecision(1) << 100.0 * result.inlier_ratio << " %) within "
             << std::setprecision(4) << result.final_max_distance_m << " m, inlier RMSE "
             << result.inlier_rmse_m << " m\n"
             << "time: " << std::setprecision(1) << result.time_ms << " ms registration + "
             << build_ms << " ms preparation (kd-tree"
-            << (method.voxel_size || method.random_ratio ? ", downsampling" : "")
+            << (result.voxel_size_m > 0.0 || method.random_ratio ? ", downsampling" : "")
             << (!method.stochastic && (needs_reference_normals(method.batch.cost) ||
                                        needs_covariances(method.batch.cost))
                     ? ", normals/covariances"

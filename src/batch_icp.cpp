@@ -342,9 +342,12 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::eager);
   const detail::PairFrame frame(reference);
-  const detail::PreparedSource src(source, frame.origin_m(), settings.cost, settings.neighborhood,
-                                   BatchPairing::kMinPairs, "the minimum of");
+  const double voxel_m = detail::source_voxel_size(reference, settings.voxel_size_m);
+  const detail::PreparedSource src(source, voxel_m, frame.origin_m(), settings.cost,
+                                   settings.neighborhood, BatchPairing::kMinPairs,
+                                   "the minimum of");
   RegistrationResult result;
+  detail::record_clouds(result, src.cloud(), voxel_m, reference);
   const double scale_m = detail::scaling_of(src.cloud(), reference, ScalingOrigin::lower_corner,
                                             settings.robust_scaling, result)
                              .scale();
@@ -361,11 +364,11 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
 
 RegistrationResult align_batch(const PointCloud& source, const PointCloud& reference,
                                const BatchSettings& settings, const Eigen::Matrix4d& T_init) {
-  settings.validate();
-  return align_batch(
-      source,
-      detail::index_for(reference, settings.cost, settings.neighborhood, settings.num_threads),
-      settings, T_init);
+  return align_batch(source, reference_index_for(reference, settings), settings, T_init);
+}
+
+ReferenceIndex reference_index_for(PointCloud reference, const BatchSettings& settings) {
+  return detail::index_for(std::move(reference), settings, detail::SurfaceEstimation::eager);
 }
 
 }  // namespace sgdicp

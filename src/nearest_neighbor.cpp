@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -208,6 +209,7 @@ struct ReferenceIndex::Impl {
   CloudAdaptor adaptor;
   KdTree tree;
   std::vector<std::unique_ptr<KdTree>> subtree_pools;  // nodes of a threaded build
+  double voxel_size_m = 0.0;
   // The bulk box, for the registrations that scale robustly: once, on first use, from any thread.
   std::once_flag bulk_once;
   ScalingBox bulk;
@@ -249,7 +251,10 @@ PointCloud checked_reference(PointCloud reference) {
 
 ReferenceIndex::ReferenceIndex(PointCloud reference, const KdTreeSettings& settings) {
   settings.validate();
-  impl_ = std::make_unique<Impl>(checked_reference(std::move(reference)), settings);
+  PointCloud checked = checked_reference(std::move(reference));
+  if (settings.voxel_size_m > 0.0) checked = voxel_downsample(checked, settings.voxel_size_m);
+  impl_ = std::make_unique<Impl>(std::move(checked), settings);
+  impl_->voxel_size_m = settings.voxel_size_m;
 }
 
 void KdTreeSettings::validate() const {
@@ -259,6 +264,10 @@ void KdTreeSettings::validate() const {
                                std::to_string(kMaxThreads) + " (0 = all cores), got " +
                                std::to_string(num_threads));
   }
+  if (!std::isfinite(voxel_size_m) || voxel_size_m < 0.0) {
+    throw InvalidSettingsError("kd-tree voxel size must be 0 (none) or positive and finite, got " +
+                               std::to_string(voxel_size_m) + " m");
+  }
 }
 
 ReferenceIndex::~ReferenceIndex() = default;
@@ -267,6 +276,9 @@ ReferenceIndex& ReferenceIndex::operator=(ReferenceIndex&&) noexcept = default;
 
 const PointCloud& ReferenceIndex::cloud() const noexcept {
   return impl_->cloud;
+}
+double ReferenceIndex::voxel_size_m() const noexcept {
+  return impl_->voxel_size_m;
 }
 const BoundingBox& ReferenceIndex::bounding_box() const noexcept {
   return impl_->box;

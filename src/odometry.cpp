@@ -197,7 +197,11 @@ Odometry::Odometry(const OdometrySettings& settings, std::string_view method, Sg
                    BatchSettings batch)
     : settings_(settings), method_(&method_from_string(method)), sgd_(sgd), batch_(batch) {
   settings_.validate();
-  if (method_->cost) sgd_.cost = batch_.cost = *method_->cost;
+  apply_method_cost(*method_, sgd_, batch_);
+  // The pipeline thins frames and map on its own voxel grid (settings_.voxel_size_m): the
+  // registration step uses them as they are.
+  sgd_.voxel_size_m = batch_.voxel_size_m = 0.0;
+  sgd_.downsample_to = batch_.downsample_to = 0;
   sgd_.validate();
   batch_.validate();
 }

@@ -1,6 +1,7 @@
 #include "sgdicp/preprocessing.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cfloat>
 #include <cmath>
 #include <exception>
@@ -9,13 +10,13 @@
 #include <sstream>
 #include <string>
 #include <thread>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
 
 #include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
+#include "sgdicp/scaling.hpp"
 #include "sgdicp/threads.hpp"
 
 namespace sgdicp {
@@ -30,6 +31,10 @@ constexpr std::size_t kMinPointsPerThread = 512;
 constexpr double kCollinearRatio = 1e-6;
 // Spreads below this many float ulps of the coordinates are rounding noise, not geometry.
 constexpr double kResolutionUlps = 16.0;
+// voxel_size_for_count: counting passes at most, and the relative error in the count that
+// ends the search early (the count is a budget, not a contract).
+constexpr int kVoxelSearchPasses = 6;
+constexpr double kVoxelCountTolerance = 0.15;
 
 std::string format_number(double value) {
   std::ostringstream out;
@@ -210,27 +215,148 @@ std::uint64_t mix(std::uint64_t h) {  // splitmix64 finaliser
   return h;
 }
 
-struct VoxelKeyHash {
-  std::size_t operator()(const VoxelKey& key) const noexcept {
-    std::uint64_t h = mix(static_cast<std::uint64_t>(key.x));
-    h = mix(h ^ static_cast<std::uint64_t>(key.y));
-    h = mix(h ^ static_cast<std::uint64_t>(key.z));
-    return static_cast<std::size_t>(h);
+// One finaliser over the three indices spread by odd constants: a third of the dependent
+// multiplications of mixing each in turn, and as well spread for a table.
+std::size_t hash_of(const VoxelKey& key) {
+  return static_cast<std::size_t>(mix((static_cast<std::uint64_t>(key.x) * 0x9e3779b97f4a7c15ULL) ^
+                                      (static_cast<std::uint64_t>(key.y) * 0xc2b2ae3d27d4eb4fULL) ^
+                                      (static_cast<std::uint64_t>(key.z) * 0x165667b19e3779f9ULL)));
+}
+
+// Occupied voxel -> its slot in first-seen order: open addressing with linear probing in one
+// flat array. Written here because std::unordered_map allocates a node per voxel: the 2 cm grid
+// of a 274k-point Kinect frame took 11.7 ms with it, 3-4x what one array of keys takes
+// (docs/performance.md, fifth round).
+class VoxelSlots {
+ public:
+  explicit VoxelSlots(std::size_t expected) {
+    rehash(std::bit_ceil(std::max<std::size_t>(64, 2 * expected)));
   }
+
+  [[nodiscard]] std::size_t size() const { return size_; }
+
+  // The slot of `key`, a new one (= size() before the call) if it was not there.
+  std::size_t slot(const VoxelKey& key) {
+    if (2 * (size_ + 1) > entries_.size()) rehash(2 * entries_.size());
+    const std::size_t mask = entries_.size() - 1;
+    for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
+      Entry& e = entries_[i];
+      if (e.slot == kEmpty) {
+        e = {key, size_};
+        return size_++;
+      }
+      if (e.key == key) return e.slot;
+    }
+  }
+
+ private:
+  static constexpr std::size_t kEmpty = std::numeric_limits<std::size_t>::max();
+  struct Entry {
+    VoxelKey key;
+    std::size_t slot = kEmpty;
+  };
+
+  void rehash(std::size_t capacity) {
+    std::vector<Entry> old(capacity);
+    old.swap(entries_);
+    const std::size_t mask = capacity - 1;
+    for (const Entry& e : old) {
+      if (e.slot == kEmpty) continue;
+      std::size_t i = hash_of(e.key) & mask;
+      while (entries_[i].slot != kEmpty) i = (i + 1) & mask;
+      entries_[i] = e;
+    }
+  }
+
+  std::vector<Entry> entries_;
+  std::size_t size_ = 0;
 };
 
 // Voxel indices stay well inside int64 so that neighbouring-voxel arithmetic by callers and
 // the conversion below can never overflow.
 constexpr double kMaxVoxelIndex = 0x1p62;
 
-std::int64_t voxel_index(float coordinate, double voxel_size_m) {
-  const double index = std::floor(static_cast<double>(coordinate) / voxel_size_m);
-  if (!(std::abs(index) < kMaxVoxelIndex)) {
-    throw InvalidSettingsError("voxel size " + format_number(voxel_size_m) +
-                               " m is too small for coordinate " + format_number(coordinate) +
-                               " m: voxel indices would exceed 2^62");
+void check_voxel_size(double voxel_size_m) {
+  if (!std::isfinite(voxel_size_m) || voxel_size_m <= 0.0) {
+    throw InvalidSettingsError("voxel size must be positive and finite, got " +
+                               format_number(voxel_size_m) + " m");
   }
-  return static_cast<std::int64_t>(index);
+}
+
+// The voxel of a point. The range of the indices is checked once, on the cloud's extreme
+// coordinates, so that the per-point key is a few inlined floors (it was 30 % of a downsampling
+// as a checked call per coordinate).
+// The largest |coordinate| of a cloud; InvalidInputError for a non-finite point.
+float largest_coordinate(const PointCloud& cloud) {
+  float largest = 0.0F;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    if (!p.allFinite()) {
+      throw InvalidInputError("cloud has a non-finite point at index " + std::to_string(i));
+    }
+    largest = std::max(largest, p.cwiseAbs().maxCoeff());
+  }
+  return largest;
+}
+
+class VoxelGrid {
+ public:
+  // `largest`: the cloud's largest_coordinate.
+  VoxelGrid(double voxel_size_m, float largest) : size_(voxel_size_m) {
+    check_voxel_size(voxel_size_m);
+    if (!(std::floor(static_cast<double>(largest) / size_) + 1.0 < kMaxVoxelIndex)) {
+      throw InvalidSettingsError("voxel size " + format_number(voxel_size_m) +
+                                 " m is too small for coordinate " + format_number(largest) +
+                                 " m: voxel indices would exceed 2^62");
+    }
+  }
+
+  [[nodiscard]] VoxelKey key(const Eigen::Vector3f& p) const noexcept {
+    return {index(p.x()), index(p.y()), index(p.z())};
+  }
+
+ private:
+  // floor() without the libm call a portable build makes of std::floor (8 % of a downsampling).
+  [[nodiscard]] std::int64_t index(float coordinate) const noexcept {
+    const double q = static_cast<double>(coordinate) / size_;
+    const auto i = static_cast<std::int64_t>(q);
+    return static_cast<double>(i) > q ? i - 1 : i;
+  }
+
+  double size_;
+};
+
+// Occupied voxels of the grid, counting stopped once above `limit`. A set of 64-bit hashes of
+// the voxels (8 bytes a slot, so it stays in cache): two voxels whose keys hash alike, which is
+// rare, would count once, which does not matter to an estimate.
+std::size_t occupied_voxels(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
+                            std::size_t limit) {
+  std::vector<std::uint64_t> set(std::bit_ceil(std::max<std::size_t>(64, 2 * expected)), 0);
+  std::size_t count = 0;
+  std::uint64_t last = 0;
+  for (const Eigen::Vector3f& p : cloud.points) {
+    const std::uint64_t h = std::max<std::uint64_t>(1, hash_of(grid.key(p)));  // 0 = empty
+    if (h == last) continue;  // scans and depth images visit a voxel in runs
+    last = h;
+    if (2 * (count + 1) > set.size()) {  // grow: re-insert into twice the slots
+      std::vector<std::uint64_t> old(2 * set.size(), 0);
+      old.swap(set);
+      for (const std::uint64_t k : old) {
+        if (k == 0) continue;
+        std::size_t i = k & (set.size() - 1);
+        while (set[i] != 0) i = (i + 1) & (set.size() - 1);
+        set[i] = k;
+      }
+    }
+    const std::size_t mask = set.size() - 1;
+    std::size_t i = h & mask;
+    while (set[i] != 0 && set[i] != h) i = (i + 1) & mask;
+    if (set[i] == 0) {
+      set[i] = h;
+      if (++count > limit) break;
+    }
+  }
+  return count;
 }
 
 // ---- random subsets ----
@@ -309,27 +435,25 @@ void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
 }
 
 PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m) {
-  if (!std::isfinite(voxel_size_m) || voxel_size_m <= 0.0) {
-    throw InvalidSettingsError("voxel size must be positive and finite, got " +
-                               format_number(voxel_size_m) + " m");
-  }
-  std::unordered_map<VoxelKey, std::size_t, VoxelKeyHash> slot_of;  // voxel -> output slot
+  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
+  VoxelSlots slots(cloud.size() / 8);
   std::vector<Eigen::Vector3d> sums;
   std::vector<std::size_t> counts;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    if (!p.allFinite()) {
-      throw InvalidInputError("cloud has a non-finite point at index " + std::to_string(i));
+  VoxelKey last_key{0, 0, 0};
+  std::size_t slot = std::numeric_limits<std::size_t>::max();
+  for (const Eigen::Vector3f& p : cloud.points) {
+    const VoxelKey key = grid.key(p);
+    // Scans and depth images visit a voxel in runs: look it up only when it changes.
+    if (slot == std::numeric_limits<std::size_t>::max() || !(key == last_key)) {
+      slot = slots.slot(key);
+      last_key = key;
     }
-    const VoxelKey key{voxel_index(p.x(), voxel_size_m), voxel_index(p.y(), voxel_size_m),
-                       voxel_index(p.z(), voxel_size_m)};
-    const auto [it, inserted] = slot_of.try_emplace(key, sums.size());
-    if (inserted) {
+    if (slot == sums.size()) {
       sums.emplace_back(Eigen::Vector3d::Zero());
       counts.push_back(0);
     }
-    sums[it->second] += p.cast<double>();
-    ++counts[it->second];
+    sums[slot] += p.cast<double>();
+    ++counts[slot];
   }
   PointCloud out;
   out.origin_m = cloud.origin_m;
@@ -339,6 +463,48 @@ PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m) {
     out.points.emplace_back((sums[v] / static_cast<double>(counts[v])).cast<float>());
   }
   return out;
+}
+
+double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {
+  if (target_points == 0 || cloud.size() <= target_points) return 0.0;
+  const float largest = largest_coordinate(cloud);
+  // Occupied voxels fall as a power of the size, N(v) ~ v^-a: a ~ 2 on surfaces (every sensor's
+  // clouds), ~3 in volumes, ~1 on lines. Start from a surface filling the bulk box's diagonal
+  // square, then take secant steps in log-log space with the slope measured by the last two.
+  const BoundingBox& box = bulk_bounding_box(cloud).box;
+  const double diagonal = (box.max - box.min).cast<double>().norm();
+  if (!(diagonal > 0.0)) return 0.0;  // all points in one place: nothing to thin
+  // A grid fine enough for the bulk cannot index a point 1e20 times farther out (a spurious
+  // return robust scaling leaves out): such a cloud is used as it is.
+  const double finest = static_cast<double>(largest) / (kMaxVoxelIndex / 4.0);
+  if (diagonal / std::sqrt(static_cast<double>(target_points)) / 1e3 < finest) return 0.0;
+  const auto target = static_cast<double>(target_points);
+  const std::size_t limit = 8 * target_points;  // a count above says "far too small"
+  double size = diagonal / std::sqrt(target);
+  double previous_size = 0.0;
+  double previous_count = 0.0;
+  double slope = 2.0;
+  for (int pass = 0; pass < kVoxelSearchPasses; ++pass) {
+    const auto count =
+        static_cast<double>(occupied_voxels(cloud, VoxelGrid(size, largest), target_points, limit));
+    if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) break;
+    if (previous_size > 0.0 && count <= static_cast<double>(limit) &&
+        previous_count <= static_cast<double>(limit) && count != previous_count) {
+      slope =
+          std::clamp(std::log(previous_count / count) / std::log(size / previous_size), 0.5, 3.0);
+    }
+    previous_size = size;
+    previous_count = count;
+    size *= std::pow(count / target, 1.0 / slope);
+  }
+  return size;
+}
+
+double registration_voxel_size(const PointCloud& cloud, double voxel_size_m,
+                               std::size_t downsample_to) {
+  if (voxel_size_m > 0.0) return voxel_size_m;
+  if (cloud.has_normals() || cloud.has_covariances()) return 0.0;
+  return voxel_size_for_count(cloud, downsample_to);
 }
 
 PointCloud random_downsample(const PointCloud& cloud, std::size_t count, std::uint64_t seed) {

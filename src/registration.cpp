@@ -46,10 +46,16 @@ class MiniBatchPairing {
         source_surfaces_(source, source_index, settings.neighborhood),
         scaling_(scaling),
         settings_(settings),
-        kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())),
-        plain_(settings.cost == CostType::point_to_point && settings.kernel == KernelType::none &&
-               settings.trim_ratio >= 1.0) {
+        kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())) {
     pairs_.reserve(settings.batch_size);
+    use_cost(settings.cost);
+  }
+
+  // The cost of the pairs from now on (the coarse stage may pair with another, SgdRun).
+  void use_cost(CostType cost) {
+    cost_ = cost;
+    plain_ = cost == CostType::point_to_point && settings_.kernel == KernelType::none &&
+             settings_.trim_ratio >= 1.0;
   }
 
   // The cost of the batch at `pose` over the pairs within d_max_scaled; their distances (scaled)
@@ -127,7 +133,7 @@ class MiniBatchPairing {
 
   // Omega of a pair (cost.hpp), with only what the cost reads looked up or estimated.
   Eigen::Matrix3d information(const Pair& pair, const Eigen::Matrix3d& rotation) {
-    const CostType type = settings_.cost;
+    const CostType type = cost_;
     const bool plane_to_plane = needs_covariances(type);
     return information_matrix(
         type,
@@ -144,7 +150,8 @@ class MiniBatchPairing {
   const UnitCubeScaling& scaling_;
   const SgdSettings& settings_;
   double kernel_scale_;  // scaled
-  bool plain_;
+  CostType cost_ = CostType::point_to_point;
+  bool plain_ = false;
   std::vector<Pair> pairs_;
 };
 
@@ -165,6 +172,8 @@ class SgdRun {
                   settings.refinement.min_distance.to_scaled(scaling.scale()),
                   settings.batch_size * settings.convergence.window) {
     batch_.reserve(settings.batch_size);
+    // The coarse stage pairs with its own cost when refinement stages follow.
+    if (settings.refinement.stages > 0) pairing_.use_cost(settings.coarse_cost);
   }
 
   // Runs from theta until converged, stopped or out of iterations (the reason goes into
@@ -192,15 +201,17 @@ class SgdRun {
         return settings_.average_iterates ? monitor_.window_mean() : theta;
       }
       schedule_.refine();
+      pairing_.use_cost(settings_.cost);
     }
     detail::set_stop(result, StopReason::max_iterations,
                      detail::iteration_limit_message(settings_.max_iterations));
     return theta;
   }
 
-  // The cost of `batch` at theta with the run's final pairing (for the uncertainty).
+  // The cost of `batch` at theta with the run's final pairing and cost (for the uncertainty).
   CostAccumulator cost_at(const std::vector<std::uint32_t>& batch, const PoseVector& theta,
                           bool with_hessian) {
+    pairing_.use_cost(settings_.cost);  // also when the run ended in its coarse stage
     distances_.clear();
     return pairing_.accumulate(batch, EulerPoseJacobian(theta), schedule_.max_distance(),
                                with_hessian, distances_);
@@ -261,10 +272,17 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::lazy);
   const detail::PairFrame frame(reference);
-  const detail::PreparedSource src(source, frame.origin_m(), settings.cost, settings.neighborhood,
-                                   settings.batch_size, "the mini-batch size",
-                                   detail::SurfaceEstimation::lazy);
+  const double voxel_m = detail::source_voxel_size(reference, settings.voxel_size_m);
+  // The source covariances are set up if either stage's cost needs them.
+  const CostType source_needs =
+      settings.refinement.stages > 0 && needs_covariances(settings.coarse_cost)
+          ? settings.coarse_cost
+          : settings.cost;
+  const detail::PreparedSource src(source, voxel_m, frame.origin_m(), source_needs,
+                                   settings.neighborhood, settings.batch_size,
+                                   "the mini-batch size", detail::SurfaceEstimation::lazy);
   RegistrationResult result;
+  detail::record_clouds(result, src.cloud(), voxel_m, reference);
   const UnitCubeScaling scaling = detail::scaling_of(
       src.cloud(), reference, settings.scaling_origin, settings.robust_scaling, result);
   result.scale_m = scaling.scale();
@@ -305,11 +323,12 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
 
 RegistrationResult align(const PointCloud& source, const PointCloud& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
-  settings.validate();
+  return align(source, reference_index_for(reference, settings), settings, T_init);
+}
+
+ReferenceIndex reference_index_for(PointCloud reference, const SgdSettings& settings) {
   // The normals and covariances the cost needs are estimated in the run, for the pairs it uses.
-  return align(source,
-               ReferenceIndex(reference, KdTreeSettings{.num_threads = settings.num_threads}),
-               settings, T_init);
+  return detail::index_for(std::move(reference), settings, detail::SurfaceEstimation::lazy);
 }
 
 }  // namespace sgdicp

@@ -28,6 +28,8 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   s.robust_scaling = false;
   s.refinement.stages = 0;
   s.average_iterates = false;
+  s.cost = s.coarse_cost = CostType::point_to_point;
+  s.downsample_to = 0;
   return s;
 }
 
@@ -245,6 +247,10 @@ constexpr ValueRange kIterations{1.0, 1e9};
 constexpr ValueRange kNeighbors{3.0, 1000.0};
 constexpr ValueRange kEvaluationPoints{0.0, 4294967295.0};
 constexpr ValueRange kThreads{0.0, static_cast<double>(kMaxThreads)};
+// A voxel side: 0 (no fixed grid) up to 1000 km; sizes too small for the coordinates are
+// refused when the grid is built (voxel indices beyond 2^62).
+constexpr ValueRange kVoxelSize{0.0, 1e6};
+constexpr ValueRange kDownsampleTo{0.0, 4294967295.0};
 // batch_size x window pair distances are kept for the refinement (4 bytes each, twice).
 constexpr double kMaxWindowPairs = 1e8;
 
@@ -256,6 +262,13 @@ constexpr std::string_view kKernelScaleHelp =
 constexpr std::string_view kTrimHelp =
     "Keep only this fraction of the pairs (per mini-batch for SGD, per iteration for batch "
     "methods), the closest ones: trimmed ICP for partial overlap";
+constexpr std::string_view kVoxelSizeHelp =
+    "Thin both clouds to one point (the centroid) per voxel of this side before registering "
+    "(timed), 0 = the grid --downsample-to chooses";
+constexpr std::string_view kDownsampleToHelp =
+    "Without --voxel-size: the voxel grid that keeps about this many points of the reference "
+    "(chosen from the data, +-15 %), applied to both clouds; clouds with at most this many "
+    "points, or with normals or covariances given, are used as they are; 0 = no downsampling";
 constexpr std::string_view kThreadsHelp =
     "Threads of one registration (today: its KD-tree build), 0 = every core; the result is the "
     "same for any count";
@@ -284,6 +297,23 @@ Setting<S> optimizer_setting() {
   s.set = [](S& x, const SettingValue& v) {
     x.optimizer.type = parse_enum<OptimizerType>(std::get<std::string>(v));
     x.optimizer.learning_rate = default_learning_rate(x.optimizer.type, x.optimizer.momentum);
+  };
+  return s;
+}
+
+// Named, the cost is the cost of every stage, as a method named for its cost (methods.hpp); a
+// coarse-cost named after it (table order) sets the first stage's.
+Setting<S> cost_setting() {
+  Setting<S> s = setting<S, &S::cost>(
+      {"cost",
+       "cost",
+       {},
+       "",
+       "Cost of a pair in every stage (a coarse-cost given too sets the first stage's): "
+       "point-to-point (the paper), point-to-plane or plane-to-plane (GICP)",
+       true});
+  s.set = [](S& x, const SettingValue& v) {
+    x.cost = x.coarse_cost = parse_enum<CostType>(std::get<std::string>(v));
   };
   return s;
 }
@@ -412,7 +442,15 @@ std::vector<Setting<S>> result_and_pair_settings() {
            "corner: the paper, points in [0, 1]; center: points in [-0.5, 0.5])"}),
       setting<S, &S::evaluation_points>(
           {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
-      setting<S, &S::cost>({"cost", "cost", {}, "", kCostHelp, true}),
+      cost_setting(),
+      setting<S, &S::coarse_cost>(
+          {"coarse-cost",
+           "coarse_cost",
+           {},
+           "",
+           "Cost of the first (coarse) stage when refinement stages follow (the refinement "
+           "stages and the result use the method's cost): point-to-point keeps the paper's wide "
+           "basin"}),
       setting<S, &S::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
       setting<S, &S::kernel_scale>(
           {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
@@ -422,6 +460,9 @@ std::vector<Setting<S>> result_and_pair_settings() {
       setting<S, &S::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
+      setting<S, &S::voxel_size_m>({"voxel-size", "voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      setting<S, &S::downsample_to>(
+          {"downsample-to", "downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
       setting<S, &S::robust_scaling>(
           {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
@@ -504,6 +545,9 @@ std::vector<Setting<B>> make_batch_table() {
       setting<B, &B::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
+      setting<B, &B::voxel_size_m>({"voxel-size", "voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      setting<B, &B::downsample_to>(
+          {"downsample-to", "downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
       setting<B, &B::robust_scaling>(
           {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),

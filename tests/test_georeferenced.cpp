@@ -177,7 +177,8 @@ TEST(Georeferencing, KittiPairOnTheKilometreGridIsTheSameRun) {
 }
 
 // Any offset: the stored floats round differently from the un-offset ones (by ~3e-5 m), which
-// a batch method does not see (< 1 mm) and SGD-ICP sees as another mini-batch path: it must
+// a batch method does not see (< 1 mm) and SGD-ICP sees as another mini-batch path and another
+// phase of its voxel grid: it must
 // stay as accurate as the clean run and well-constrained (before: quantised to 0.25-0.5 m,
 // reported degenerate). Clouds whose origins differ (one on each side of a grid line) give the
 // same.
@@ -199,7 +200,10 @@ TEST(Georeferencing, KittiPairAtUtmCoordinates) {
     const RegistrationResult r = align(source, reference);
     EXPECT_TRUE(r.converged) << r.message;
     EXPECT_FALSE(r.degenerate) << r.constraint_ratio;
-    EXPECT_NEAR(r.constraint_ratio, clean.constraint_ratio, 0.1 * clean.constraint_ratio);
+    // Within 25 %: the default voxel grid falls on other points at another offset (its phase
+    // is set by the stored coordinates), which moves the ratio by ~12 %; a quantised cloud was
+    // 97 % off (0.005 against 0.17).
+    EXPECT_NEAR(r.constraint_ratio, clean.constraint_ratio, 0.25 * clean.constraint_ratio);
     // Errors at the sensor (the offset point), as for the clean pair at its origin.
     const Eigen::Matrix4d T_at_sensor = between_stored(r.T_reference_source, kOffset_m, kOffset_m);
     EXPECT_LT(translation_error(T_at_sensor, T_gt), 0.05);

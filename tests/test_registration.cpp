@@ -336,17 +336,30 @@ PairRun run_pair(const RegistrationPair& pair, const SgdSettings& s) {
 
 TEST(RealData, KittiMovedCopiesTableII) {
   // The paper's Table II protocol: a scan vs. a copy moved by up to 30 m / 30 deg. The ground
-  // truth is exact and every point has its twin, so only float storage limits the answer
-  // (1e-7 relative on 80 m ranges = 0.01 mm); 5 mm / 0.01 deg leaves room and still fails any
-  // wrong basin by three orders of magnitude.
+  // truth is exact and every point has its twin, so at full resolution only float storage
+  // limits the answer (1e-7 relative on 80 m ranges = 0.01 mm); 5 mm / 0.01 deg leaves room and
+  // still fails any wrong basin by three orders of magnitude. On the default voxel grid (~0.3 m)
+  // the twins fall into differently placed voxels and their centroids differ by up to a voxel:
+  // 2 cm / 0.03 deg there, still far from any wrong basin.
   const auto file = shared("pairs/kitti_seq00_moved_copies.txt");
   SKIP_WITHOUT(file);
   for (const auto& pair : read_pairs_file(file)) {
     SCOPED_TRACE(pair.reference.filename().string());
     const PairRun def = run_pair(pair, SgdSettings{});
     EXPECT_TRUE(def.result.converged);
-    EXPECT_LT(def.t_err, 0.005);
-    EXPECT_LT(def.r_err_deg, 0.01);
+    EXPECT_GT(def.result.voxel_size_m, 0.0);
+    EXPECT_LT(def.t_err, 0.02);
+    EXPECT_LT(def.r_err_deg, 0.03);
+    // Every point, with the paper's cost (point-to-plane at full resolution lost one copy, 17 m
+    // off: its basin is narrower there than on the voxel grid).
+    SgdSettings full;
+    full.downsample_to = 0;
+    full.cost = CostType::point_to_point;
+    const PairRun every_point = run_pair(pair, full);
+    EXPECT_TRUE(every_point.result.converged);
+    EXPECT_EQ(every_point.result.voxel_size_m, 0.0);
+    EXPECT_LT(every_point.t_err, 0.005);
+    EXPECT_LT(every_point.r_err_deg, 0.01);
     const PairRun paper = run_pair(pair, SgdSettings::paper(OptimizerType::sgd));
     EXPECT_LT(paper.t_err, 0.005);
     EXPECT_LT(paper.r_err_deg, 0.01);

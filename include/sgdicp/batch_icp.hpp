@@ -27,9 +27,15 @@ namespace sgdicp {
     const PointCloud& source, const ReferenceIndex& reference, const BatchSettings& settings = {},
     const Eigen::Matrix4d& T_init = Eigen::Matrix4d::Identity());
 
-/// Convenience overload that builds the index (and the reference normals or covariances) itself.
+/// Convenience overload that builds the index (reference_index_for) itself.
 [[nodiscard]] RegistrationResult align_batch(
     const PointCloud& source, const PointCloud& reference, const BatchSettings& settings = {},
     const Eigen::Matrix4d& T_init = Eigen::Matrix4d::Identity());
+
+/// The index align_batch(source, reference cloud, settings) builds: the reference on the
+/// settings' voxel grid (none by default), its KD-tree, and the normals or covariances the cost
+/// needs. Reuse it over many sources for the same results as passing the cloud each time.
+[[nodiscard]] ReferenceIndex reference_index_for(PointCloud reference,
+                                                 const BatchSettings& settings);
 
 }  // namespace sgdicp

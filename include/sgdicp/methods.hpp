@@ -8,6 +8,7 @@
 
 #include "sgdicp/cost.hpp"
 #include "sgdicp/enum_names.hpp"
+#include "sgdicp/settings.hpp"
 
 namespace sgdicp {
 
@@ -20,14 +21,17 @@ struct Method {
   std::string_view name;
   Solver solver;
   /// The cost the method sets; none for "sgd", which keeps the cost of its settings
-  /// (point-to-point, the paper's, by default).
+  /// (point-to-plane by default; the paper preset's point-to-point).
   std::optional<CostType> cost;
   std::string_view help;
 };
 
-inline constexpr std::array<Method, 6> kMethods{{
+inline constexpr std::array<Method, 7> kMethods{{
     {"sgd", Solver::sgd, std::nullopt,
-     "SGD-ICP with the settings' cost (point-to-point: the paper)"},
+     "SGD-ICP with the settings' cost: point-to-plane by default, point-to-point with the "
+     "paper preset"},
+    {"sgd-point", Solver::sgd, CostType::point_to_point,
+     "SGD-ICP on point-to-point (the paper's cost)"},
     {"sgd-plane", Solver::sgd, CostType::point_to_plane, "SGD-ICP on point-to-plane"},
     {"sgd-gicp", Solver::sgd, CostType::plane_to_plane, "SGD-ICP on plane-to-plane (GICP)"},
     {"icp", Solver::batch, CostType::point_to_point,
@@ -37,6 +41,14 @@ inline constexpr std::array<Method, 6> kMethods{{
     {"gicp", Solver::batch, CostType::plane_to_plane,
      "batch plane-to-plane (GICP), Levenberg-Marquardt step"},
 }};
+
+/// Sets the cost a method fixes, in every stage: a method named for its cost pairs with that cost
+/// from the first mini-batch to the last (SgdSettings::coarse_cost too); "sgd" keeps the
+/// settings' costs (by default point-to-point coarse, point-to-plane refinement).
+inline void apply_method_cost(const Method& method, SgdSettings& sgd, BatchSettings& batch) {
+  if (!method.cost) return;
+  sgd.cost = sgd.coarse_cost = batch.cost = *method.cost;
+}
 
 /// "sgd, sgd-plane, ... or gicp".
 [[nodiscard]] inline std::string method_list(std::string_view last_separator = " or ") {

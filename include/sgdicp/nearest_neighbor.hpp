@@ -30,8 +30,13 @@ struct KdTreeSettings {
   /// tree, and so every query result, is the same for any count; clouds under 32,768 points are
   /// built on one thread (a thread start would cost more than it saves).
   std::size_t num_threads = 1;
+  /// Thin the reference with a voxel grid of this side before indexing it, metres
+  /// (voxel_downsample, preprocessing.hpp: one centroid per occupied voxel); 0 = index every
+  /// point as given. align() thins its source with the same grid (registration.hpp).
+  double voxel_size_m = 0.0;
 
-  /// Throws InvalidSettingsError for a leaf size of 0 or more than 1024 threads.
+  /// Throws InvalidSettingsError for a leaf size of 0, more than 1024 threads or a negative or
+  /// non-finite voxel size.
   void validate() const;
   bool operator==(const KdTreeSettings&) const = default;
 };
@@ -39,7 +44,8 @@ struct KdTreeSettings {
 /// A KD-tree (nanoflann) over a reference cloud it owns. Non-copyable, cheap to move.
 class ReferenceIndex {
  public:
-  /// Builds the tree. Throws InvalidInputError for an empty cloud or a non-finite point.
+  /// Builds the tree, over the reference thinned by settings.voxel_size_m when it is set. Throws
+  /// InvalidInputError for an empty cloud or a non-finite point.
   explicit ReferenceIndex(PointCloud reference, const KdTreeSettings& settings = {});
   ~ReferenceIndex();
   ReferenceIndex(ReferenceIndex&&) noexcept;
@@ -52,6 +58,8 @@ class ReferenceIndex {
   /// The box of the bulk of the reference (scaling.hpp), computed on first use and kept.
   [[nodiscard]] const ScalingBox& bulk_bounding_box() const;
   [[nodiscard]] std::size_t size() const noexcept { return cloud().size(); }
+  /// The voxel grid the reference was thinned with before indexing, metres (0 = none).
+  [[nodiscard]] double voxel_size_m() const noexcept;
 
   /// The nearest reference point to query, if one lies within sqrt(max_squared_distance).
   /// Bounding the search prunes the tree early, so rejected queries are cheap.

@@ -87,6 +87,21 @@ void check_reference_prepared(const ReferenceIndex& reference, CostType cost);
 /// InvalidInputError for a non-finite point.
 [[nodiscard]] PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m);
 
+/// The voxel size, metres, at which voxel_downsample keeps about `target_points` of the cloud
+/// (within ~15 %; a few counting passes over the cloud, each cheaper than one voxel_downsample),
+/// or 0 when there is nothing to thin: target_points is 0, the cloud has at most that many
+/// points, they all lie in one place, or a point lies so far beyond the bulk (1e30 m) that no
+/// grid fine enough for the bulk can index it. How the registrations choose their grid from the
+/// data (SgdSettings::downsample_to, docs/preprocessing.md). Throws InvalidInputError for a
+/// non-finite point.
+[[nodiscard]] double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points);
+
+/// The voxel grid a registration thins `cloud` with, metres (0 = none): voxel_size_m when
+/// positive, else voxel_size_for_count(cloud, downsample_to), except for a cloud that carries
+/// normals or covariances, which the automatic grid leaves as it is so that they are used.
+[[nodiscard]] double registration_voxel_size(const PointCloud& cloud, double voxel_size_m,
+                                             std::size_t downsample_to);
+
 /// `count` distinct points chosen uniformly at random without replacement (every subset of
 /// that size is equally likely), returned in input order with their normals and covariances
 /// when the cloud has them. Seeded and reproducible on any standard library (std::mt19937_64 raw

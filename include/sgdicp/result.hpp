@@ -66,6 +66,11 @@ struct RegistrationResult {
   /// (robust_scaling); they are still paired, and d_max rejects them.
   std::size_t far_points = 0;
   double time_ms = 0.0;  ///< wall time of the registration (not of the index build)
+  /// The voxel grid the source was thinned with before registering, metres (0 = none), and the
+  /// points registered: of the source after thinning, of the reference as indexed.
+  double voxel_size_m = 0.0;
+  std::size_t source_points = 0;
+  std::size_t reference_points = 0;
   /// Geometry check of the final alignment (when requested): the smallest over the largest
   /// eigenvalue of the point-to-plane information matrix of the inlier pairs, in the scaled
   /// space. Near 0, some motion (sliding along a plane or a corridor, turning about an axis of
@@ -118,6 +123,11 @@ void for_each_result_field(F&& f) {
     "(robust_scaling); still paired, d_max rejects them.");
   f("time_ms", &R::time_ms,
     "Wall time of the registration, milliseconds (KD-tree build excluded).");
+  f("voxel_size_m", &R::voxel_size_m,
+    "Side of the voxel grid the source was thinned with before registering, metres (0 = every "
+    "point used).");
+  f("source_points", &R::source_points, "Source points registered (after thinning).");
+  f("reference_points", &R::reference_points, "Reference points indexed (after thinning).");
   f("constraint_ratio", &R::constraint_ratio,
     "Smallest over largest eigenvalue of the point-to-plane information matrix of the final "
     "inlier pairs (scaled space); near 0, some motion is not constrained by the data (with "

@@ -41,9 +41,16 @@ struct SgdSettings {
   ConvergenceSettings convergence{};
   RefinementSettings refinement{};
   /// Cost of a pair (cost.hpp): the paper's point-to-point, point-to-plane, or plane-to-plane
-  /// (GICP). The plane costs need normals / covariances (estimated with `neighborhood` when the
-  /// clouds lack them).
-  CostType cost = CostType::point_to_point;
+  /// (GICP). The plane costs need normals / covariances (estimated with `neighborhood` for the
+  /// points the run pairs, when the clouds lack them). Default point-to-plane: on the voxel grid
+  /// it is 1.5-2x more precise in rotation than point-to-point where the ground truth can tell
+  /// (7-Scenes, moved copies, car) and keeps the wide basin (docs/performance.md, fifth round).
+  CostType cost = CostType::point_to_plane;
+  /// Cost of the first (coarse) stage when refinement stages follow; the refinement stages and
+  /// the result use `cost`. Point-to-point keeps the paper's wide basin, which point-to-plane
+  /// loses: KITTI pairs started 30 m / 30 deg off, 100 % solved against 70-75 % with
+  /// point-to-plane throughout (docs/performance.md, fifth round); and it needs no normals.
+  CostType coarse_cost = CostType::point_to_point;
   /// Robust kernel on each pair's residual (robust_kernel.hpp) ...
   KernelType kernel = KernelType::none;
   /// ... and its scale: the residual size where it starts to down-weight.
@@ -79,13 +86,27 @@ struct SgdSettings {
   /// clouds, of the CLI and of Python (KdTreeSettings::num_threads); the SGD loop itself runs on
   /// one. 0 = every core. The result is identical for any count.
   std::size_t num_threads = 1;
+  /// Voxel-grid downsampling of both clouds before registering (preprocessing.hpp): the voxel
+  /// side, metres; 0 = the grid downsample_to chooses.
+  double voxel_size_m = 0.0;
+  /// Without voxel_size_m: the grid that keeps about this many points of the reference
+  /// (voxel_size_for_count), applied to both clouds where the library builds the reference's
+  /// index (reference_index_for, align() on two clouds, the CLI, Python arrays); 0 = none. An
+  /// index built from a cloud as given keeps both clouds as given. One voxel grid evens out the
+  /// density of near and far returns and indexes ~20k points instead of 100k-300k: on every
+  /// pairs file and the 7-Scenes pairs it is both faster and more precise than full resolution
+  /// (docs/performance.md, fifth round). 20,000 is what small_gicp's recommended voxels (0.25 m
+  /// outdoor, 2 cm Kinect) leave of a KITTI scan or a 7-Scenes frame. Clouds of at most this many
+  /// points, or that carry normals or covariances, are used as they are.
+  std::size_t downsample_to = 20000;
   /// Pose uncertainty of the result (uncertainty.hpp, docs/uncertainty.md): none, laplace or
   /// sgld, with the sampler's and the calibration's settings.
   UncertaintySettings uncertainty{};
 
   /// The paper's settings: m = 160, d_max = 0.5 scaled, the step rule's step size
   /// (default_learning_rate: the paper's fixed step alpha = 2, Adam 0.01), no refinement, the
-  /// last iterate returned, the paper's scaling origin (lower corner).
+  /// last iterate returned, the paper's scaling origin (lower corner), its point-to-point cost,
+  /// every point used.
   static SgdSettings paper(OptimizerType optimizer = OptimizerType::sgd);
 
   /// Throws InvalidSettingsError naming the first setting outside its range (settings_table())
@@ -120,6 +141,9 @@ struct BatchSettings {
   bool check_degeneracy = true;          ///< see SgdSettings
   bool robust_scaling = true;            ///< see SgdSettings (the scale of scaled distances)
   std::size_t num_threads = 1;           ///< see SgdSettings
+  double voxel_size_m = 0.0;             ///< see SgdSettings
+  /// See SgdSettings; 0 here: the batch baselines register every point unless asked.
+  std::size_t downsample_to = 0;
   /// Record a per-iteration trace in the result: the pose after each iteration, every source
   /// point processed per iteration, step size 1, d_max, the pairs kept and, as the cost, their
   /// mean squared distance before the step (scaled units^2).

@@ -364,8 +364,14 @@ class Settings:
     uncertainty: UncertaintySettings
     """UncertaintySettings. Default: no uncertainty."""
     cost: CostType
-    """Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP) (CostType
-    or one of its names). Keyword cost=. Default CostType.point_to_point.
+    """Cost of a pair in every stage (a coarse-cost given too sets the first stage's):
+    point-to-point (the paper), point-to-plane or plane-to-plane (GICP) (CostType or one of its
+    names). Keyword cost=. Default CostType.point_to_plane.
+    """
+    coarse_cost: CostType
+    """Cost of the first (coarse) stage when refinement stages follow (the refinement stages and the
+    result use the method's cost): point-to-point keeps the paper's wide basin (CostType or one
+    of its names). Keyword coarse_cost=. Default CostType.point_to_point.
     """
     kernel: KernelType
     """Robust kernel on the pair residuals (KernelType or one of its names). Keyword kernel=.
@@ -417,6 +423,17 @@ class Settings:
     """Threads of one registration (today: its KD-tree build), 0 = every core; the result is the
     same for any count, in [0, 1024]. Keyword threads=. Default 1.
     """
+    voxel_size_m: float
+    """Thin both clouds to one point (the centroid) per voxel of this side before registering
+    (timed), 0 = the grid --downsample-to chooses, m in [0, 1000000]. Keyword voxel_size=.
+    Default 0.0.
+    """
+    downsample_to: int
+    """Without --voxel-size: the voxel grid that keeps about this many points of the reference
+    (chosen from the data, +-15 %), applied to both clouds; clouds with at most this many points,
+    or with normals or covariances given, are used as they are; 0 = no downsampling, in [0,
+    4294967295]. Keyword downsample_to=. Default 20000.
+    """
 
     def __init__(
         self,
@@ -447,6 +464,7 @@ class Settings:
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         cost: _CostName = ...,
+        coarse_cost: _CostName = ...,
         kernel: _KernelName = ...,
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
@@ -454,6 +472,8 @@ class Settings:
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
         threads: int = ...,
+        voxel_size: float = ...,
+        downsample_to: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
         uncertainty: _UncertaintyName = ...,
@@ -495,6 +515,7 @@ class Settings:
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         cost: _CostName = ...,
+        coarse_cost: _CostName = ...,
         kernel: _KernelName = ...,
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
@@ -502,6 +523,8 @@ class Settings:
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
         threads: int = ...,
+        voxel_size: float = ...,
+        downsample_to: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
         uncertainty: _UncertaintyName = ...,
@@ -546,6 +569,7 @@ class Settings:
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         cost: _CostName = ...,
+        coarse_cost: _CostName = ...,
         kernel: _KernelName = ...,
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
@@ -553,6 +577,8 @@ class Settings:
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
         threads: int = ...,
+        voxel_size: float = ...,
+        downsample_to: int = ...,
         evaluation_points: int = ...,
         record_trace: bool = ...,
         uncertainty: _UncertaintyName = ...,
@@ -640,6 +666,17 @@ class BatchSettings:
     """Threads of one registration (today: its KD-tree build), 0 = every core; the result is the
     same for any count, in [0, 1024]. Keyword threads=. Default 1.
     """
+    voxel_size_m: float
+    """Thin both clouds to one point (the centroid) per voxel of this side before registering
+    (timed), 0 = the grid --downsample-to chooses, m in [0, 1000000]. Keyword voxel_size=.
+    Default 0.0.
+    """
+    downsample_to: int
+    """Without --voxel-size: the voxel grid that keeps about this many points of the reference
+    (chosen from the data, +-15 %), applied to both clouds; clouds with at most this many points,
+    or with normals or covariances given, are used as they are; 0 = no downsampling, in [0,
+    4294967295]. Keyword downsample_to=. Default 0.
+    """
     record_trace: bool
     """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
 
@@ -660,6 +697,8 @@ class BatchSettings:
         check_degeneracy: bool = ...,
         robust_scaling: bool = ...,
         threads: int = ...,
+        voxel_size: float = ...,
+        downsample_to: int = ...,
         record_trace: bool = ...,
         cost: _CostName = ...,
     ) -> None:
@@ -745,6 +784,11 @@ class ReferenceIndex:
         georeferenced points.
         """
     @property
+    def voxel_size_m(self) -> float:
+        """The voxel grid the points were thinned with before indexing, metres (0 = indexed as
+        given); registrations against the index thin their source on the same grid.
+        """
+    @property
     def non_finite_dropped(self) -> int:
         """Rows of the input dropped for a NaN or infinite coordinate."""
     @property
@@ -792,8 +836,8 @@ class Trace:
 
 class RegistrationResult:
     """What register() returns: the transform, why it stopped, the work done and the final inlier
-    statistics (every field of the C++ RegistrationResult, plus the point counts and the KD-tree
-    build time).
+    statistics (every field of the C++ RegistrationResult, plus the non-finite rows dropped and
+    the KD-tree build time).
     """
 
     @property
@@ -861,14 +905,19 @@ class RegistrationResult:
         reference, milliseconds (0 for a ReferenceIndex).
         """
     @property
+    def voxel_size_m(self) -> float:
+        """Side of the voxel grid the source was thinned with before registering, metres (0 = every
+        point used).
+        """
+    @property
     def source_points(self) -> int:
-        """Finite source points used."""
+        """Source points registered (after thinning)."""
     @property
     def source_non_finite_dropped(self) -> int:
         """Source rows dropped for a NaN or infinite coordinate."""
     @property
     def reference_points(self) -> int:
-        """Finite reference points indexed."""
+        """Reference points indexed (after thinning)."""
     @property
     def reference_non_finite_dropped(self) -> int:
         """Reference rows dropped for a NaN or infinite coordinate."""
@@ -943,6 +992,7 @@ def register(
     average: bool = ...,
     scaling_origin: _OriginName = ...,
     cost: _CostName = ...,
+    coarse_cost: _CostName = ...,
     kernel: _KernelName = ...,
     kernel_scale: _DistanceValue = ...,
     trim: float = ...,
@@ -982,8 +1032,9 @@ def register(
         The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
         the batch methods (None = BatchSettings(), whose cost the method sets).
     method : str, default 'sgd'
-        The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-point by default),
-        'sgd-plane' / 'sgd-gicp' (SGD-ICP on point-to-plane / plane-to-plane), 'icp' (batch
+        The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-plane by default,
+        point-to-point with Settings.paper()), 'sgd-point' / 'sgd-plane' / 'sgd-gicp' (SGD-ICP on
+        point-to-point / point-to-plane / plane-to-plane), 'icp' (batch
         point-to-point, closed-form SVD step), 'icp-plane' (batch point-to-plane) or 'gicp' (batch
         plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
         error). An unknown name raises InvalidSettingsError.
@@ -999,8 +1050,8 @@ def register(
         rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True), record_trace
-        (False).
+        check_degeneracy (True), threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]),
+        downsample_to (0, [0, 4294967295]), robust_scaling (True), record_trace (False).
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
         batch_size (160, [1, 10000000]), max_distance (Distance.scaled(0.5)),
@@ -1012,10 +1063,11 @@ def register(
         refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
         min_distance (Distance.scaled(0.0001)), average (True),
         scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
-        cost (CostType.point_to_point), kernel (KernelType.none),
-        kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), threads (1, [0, 1024]), robust_scaling (True),
-        record_trace (False), uncertainty (UncertaintyType.none),
+        cost (CostType.point_to_plane), coarse_cost (CostType.point_to_point),
+        kernel (KernelType.none), kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]),
+        neighbors (20, [3, 1000]), check_degeneracy (True), threads (1, [0, 1024]),
+        voxel_size (0.0, [0, 1000000]), downsample_to (20000, [0, 4294967295]),
+        robust_scaling (True), record_trace (False), uncertainty (UncertaintyType.none),
         uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
         thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), temper (True),
         block_size (Distance.scaled(0.1)).
@@ -1342,13 +1394,14 @@ class Odometry:
     """
 
     def __init__(self, method: str = "sgd", **settings: Any) -> None:
-        """method: the registration step, a --method of the CLI (sgd, sgd-plane, sgd-gicp, icp,
-        icp-plane or gicp). Keywords: the odometry settings of `sgdicp odometry` (max_range (100
-        m), min_range (0 m), voxel_size (0 m), max_points_per_voxel (20), initial_threshold (0
-        m), min_motion (0 m), max_translation_per_frame (5 m), max_rotation_per_frame (45 deg); 0
-        = derived from the first frame, docs/odometry.md) and the keywords of register() for the
-        method. max_distance= fixes d_max and turns the adaptive threshold off. Raises TypeError
-        for an unknown keyword, InvalidSettingsError for an invalid value.
+        """method: the registration step, a --method of the CLI (sgd, sgd-point, sgd-plane,
+        sgd-gicp, icp, icp-plane or gicp). Keywords: the odometry settings of `sgdicp odometry`
+        (max_range (100 m), min_range (0 m), voxel_size (0 m), max_points_per_voxel (20),
+        initial_threshold (0 m), min_motion (0 m), max_translation_per_frame (5 m),
+        max_rotation_per_frame (45 deg); 0 = derived from the first frame, docs/odometry.md) and
+        the keywords of register() for the method. max_distance= fixes d_max and turns the
+        adaptive threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for
+        an invalid value.
         """
     def register_frame(self, points: _Points) -> npt.NDArray[np.float64]:
         """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),

@@ -109,10 +109,14 @@ struct SharedIndex {
 
 /// Builds the KD-tree and gives the reference what `cost` needs (normals or covariances), with
 /// the GIL released.
-std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, const KdTreeSettings& tree,
-                                         CostType cost, const NeighborhoodSettings& neighborhood) {
+/// With downsample_to > 0 and no tree.voxel_size_m, the voxel grid is chosen from the points
+/// (registration_voxel_size), as reference_index_for does.
+std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, KdTreeSettings tree,
+                                         CostType cost, const NeighborhoodSettings& neighborhood,
+                                         std::size_t downsample_to = 0) {
   const py::gil_scoped_release release;
   const auto start = std::chrono::steady_clock::now();
+  tree.voxel_size_m = registration_voxel_size(converted.cloud, tree.voxel_size_m, downsample_to);
   ReferenceIndex index(std::move(converted.cloud), tree);
   prepare_reference(index, cost, neighborhood);
   const double ms =
@@ -150,9 +154,7 @@ struct Result {
   RegistrationResult fields;  ///< the C++ result (its trace moved into `trace`)
   py::array_t<double> T_reference_source;
   double build_ms = 0.0;
-  std::size_t source_points = 0;
   std::size_t source_non_finite_dropped = 0;
-  std::size_t reference_points = 0;
   std::size_t reference_non_finite_dropped = 0;
   Trace trace;
   py::array_t<double> covariance;      // (6, 6)
@@ -254,26 +256,37 @@ BatchSettings batch_settings_or_default(const py::handle& settings, const Method
   return settings.cast<BatchSettings>();
 }
 
-/// How a solver gets the normals or covariances its cost needs: the SGD solver estimates them
-/// in the run for the pairs it uses, the batch solver needs them in the index beforehand.
-enum class Surfaces { in_run, in_index };
+/// What the reference index of a registration holds, read from its settings: the voxel grid
+/// and the threads of reference_index_for, and the normals or covariances of `cost`, which the
+/// batch methods need in the index (the SGD methods estimate theirs during the run: none).
+struct ReferenceNeeds {
+  std::optional<CostType> cost;
+  NeighborhoodSettings neighborhood;
+  KdTreeSettings tree;
+  std::size_t downsample_to = 0;
+};
 
-/// Registration with either solver: the index (given, or built, with the normals or covariances
-/// `cost` needs when the solver wants them there), then `run(index)` with the GIL released.
+template <typename Settings>
+ReferenceNeeds needs_of(const Settings& s, bool cost_in_index) {
+  return {cost_in_index ? std::optional<CostType>(s.cost) : std::nullopt, s.neighborhood,
+          KdTreeSettings{.num_threads = s.num_threads, .voxel_size_m = s.voxel_size_m},
+          s.downsample_to};
+}
+
+/// Registration with either solver: the index (given, or built as `needs` says), then
+/// `run(index)` with the GIL released.
 template <typename Run>
-Result register_with(const ConvertedCloud& src, const py::handle& reference, CostType cost,
-                     const NeighborhoodSettings& neighborhood, std::size_t num_threads,
-                     Surfaces surfaces, Run run) {
+Result register_with(const ConvertedCloud& src, const py::handle& reference,
+                     const ReferenceNeeds& needs, Run run) {
   std::shared_ptr<const SharedIndex> index;
   double build_ms = 0.0;
   if (py::isinstance<SharedIndex>(reference)) {
     index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during the run
-    if (surfaces == Surfaces::in_index) check_prepared(*index, cost);
+    if (needs.cost) check_prepared(*index, *needs.cost);
   } else {
-    auto built =
-        build_index(cloud_from_array(reference, "reference", NonFinite::drop),
-                    KdTreeSettings{.num_threads = num_threads},
-                    surfaces == Surfaces::in_index ? cost : CostType::point_to_point, neighborhood);
+    auto built = build_index(cloud_from_array(reference, "reference", NonFinite::drop), needs.tree,
+                             needs.cost.value_or(CostType::point_to_point), needs.neighborhood,
+                             needs.downsample_to);
     build_ms = built->build_ms;
     index = std::move(built);
   }
@@ -284,11 +297,24 @@ Result register_with(const ConvertedCloud& src, const py::handle& reference, Cos
   }();
   Result out = make_result(r);
   out.build_ms = build_ms;
-  out.source_points = src.cloud.size();
   out.source_non_finite_dropped = src.non_finite_dropped;
-  out.reference_points = index->index.size();
   out.reference_non_finite_dropped = index->non_finite_dropped;
   return out;
+}
+
+/// The settings of a method with the user's settings object and keyword overrides.
+SgdSettings sgd_settings_of(const Method& m, const py::handle& settings,
+                            const py::kwargs& overrides) {
+  SgdSettings base = settings_or_default(settings, m);
+  BatchSettings unused;
+  apply_method_cost(m, base, unused);
+  return with_overrides(base, overrides);
+}
+BatchSettings batch_settings_of(const Method& m, const py::handle& settings,
+                                const py::kwargs& overrides) {
+  BatchSettings base = batch_settings_or_default(settings, m);
+  base.cost = *m.cost;
+  return with_batch_overrides(base, overrides, std::string(m.name));
 }
 
 Result register_clouds(const py::handle& source, const py::handle& reference,
@@ -299,48 +325,31 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
     throw InvalidSettingsError("method='" + std::string(m.name) +
                                "' sets the cost; drop cost= (or use method='sgd' with cost=)");
   }
+  const auto T_init = [&] {
+    return init.is_none() ? Eigen::Matrix4d::Identity().eval() : matrix_from_array(init, "init");
+  };
   if (m.solver == Solver::sgd) {
-    SgdSettings base = settings_or_default(settings, m);
-    if (m.cost) base.cost = *m.cost;
-    const SgdSettings s = with_overrides(base, overrides);
-    const Eigen::Matrix4d T_init =
-        init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
+    const SgdSettings s = sgd_settings_of(m, settings, overrides);
+    const Eigen::Matrix4d T = T_init();
     const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
-    return register_with(
-        src, reference, s.cost, s.neighborhood, s.num_threads, Surfaces::in_run,
-        [&](const ReferenceIndex& index) { return align(src.cloud, index, s, T_init); });
+    return register_with(src, reference, needs_of(s, false), [&](const ReferenceIndex& index) {
+      return align(src.cloud, index, s, T);
+    });
   }
-  BatchSettings base = batch_settings_or_default(settings, m);
-  base.cost = *m.cost;
-  const BatchSettings b = with_batch_overrides(base, overrides, std::string(m.name));
-  const Eigen::Matrix4d T_init =
-      init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
+  const BatchSettings b = batch_settings_of(m, settings, overrides);
+  const Eigen::Matrix4d T = T_init();
   const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
-  return register_with(
-      src, reference, b.cost, b.neighborhood, b.num_threads, Surfaces::in_index,
-      [&](const ReferenceIndex& index) { return align_batch(src.cloud, index, b, T_init); });
+  return register_with(src, reference, needs_of(b, true), [&](const ReferenceIndex& index) {
+    return align_batch(src.cloud, index, b, T);
+  });
 }
 
 /// What the reference index that register_clouds builds for an array reference holds, for the
-/// same method, settings and overrides: the SGD methods estimate their cost's normals or
-/// covariances during the run, the batch methods need them in the index.
-struct ReferenceNeeds {
-  CostType cost;
-  NeighborhoodSettings neighborhood;
-  std::size_t num_threads;
-};
+/// same method, settings and overrides.
 ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
                                const py::kwargs& overrides) {
-  if (m.solver == Solver::sgd) {
-    SgdSettings base = settings_or_default(settings, m);
-    if (m.cost) base.cost = *m.cost;
-    const SgdSettings s = with_overrides(base, overrides);
-    return {CostType::point_to_point, s.neighborhood, s.num_threads};
-  }
-  BatchSettings base = batch_settings_or_default(settings, m);
-  base.cost = *m.cost;
-  const BatchSettings b = with_batch_overrides(base, overrides, std::string(m.name));
-  return {b.cost, b.neighborhood, b.num_threads};
+  if (m.solver == Solver::sgd) return needs_of(sgd_settings_of(m, settings, overrides), false);
+  return needs_of(batch_settings_of(m, settings, overrides), true);
 }
 
 // ---- file I/O
@@ -409,8 +418,9 @@ settings : Settings, BatchSettings or None, default None
     The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
     the batch methods (None = BatchSettings(), whose cost the method sets).
 method : str, default 'sgd'
-    The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-point by default),
-    'sgd-plane' / 'sgd-gicp' (SGD-ICP on point-to-plane / plane-to-plane), 'icp' (batch
+    The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-plane by default,
+    point-to-point with Settings.paper()), 'sgd-point' / 'sgd-plane' / 'sgd-gicp' (SGD-ICP on
+    point-to-point / point-to-plane / plane-to-plane), 'icp' (batch
     point-to-point, closed-form SVD step), 'icp-plane' (batch point-to-plane) or 'gicp' (batch
     plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
     error). An unknown name raises InvalidSettingsError.
@@ -491,9 +501,9 @@ void bind_reference_index(py::module_& m) {
              const py::kwargs& overrides) {
             const ReferenceNeeds needs =
                 reference_needs(method_from_object(method), settings, overrides);
-            return build_index(cloud_from_array(points, "reference", NonFinite::drop),
-                               KdTreeSettings{.num_threads = needs.num_threads}, needs.cost,
-                               needs.neighborhood);
+            return build_index(cloud_from_array(points, "reference", NonFinite::drop), needs.tree,
+                               needs.cost.value_or(CostType::point_to_point), needs.neighborhood,
+                               needs.downsample_to);
           },
           "points"_a, py::kw_only(), "method"_a = "sgd", "settings"_a = py::none(),
           "The index that register(source, points, method=method, settings=settings, "
@@ -510,6 +520,10 @@ void bind_reference_index(py::module_& m) {
           },
           "The indexed points: a read-only (N, 3) float32 view (no copy); a float64 copy for "
           "georeferenced points.")
+      .def_property_readonly(
+          "voxel_size_m", [](const SharedIndex& s) { return s.index.voxel_size_m(); },
+          "The voxel grid the points were thinned with before indexing, metres (0 = indexed as "
+          "given); registrations against the index thin their source on the same grid.")
       .def_property_readonly(
           "non_finite_dropped", [](const SharedIndex& s) { return s.non_finite_dropped; },
           "Rows of the input dropped for a NaN or infinite coordinate.")
@@ -566,7 +580,7 @@ void bind_results(py::module_& m) {
       m, "RegistrationResult",
       "What register() returns: the transform, why it stopped, the work done and "
       "the final inlier statistics (every field of the C++ RegistrationResult, "
-      "plus the point counts and the KD-tree build time).");
+      "plus the non-finite rows dropped and the KD-tree build time).");
   result
       .def_readonly("T_reference_source", &Result::T_reference_source,
                     "(4, 4) float64, metres: maps source points into the reference frame, p_ref "
@@ -574,11 +588,8 @@ void bind_results(py::module_& m) {
       .def_readonly("build_ms", &Result::build_ms,
                     "Wall time of the KD-tree build (and reference normals/covariances) for an "
                     "array reference, milliseconds (0 for a ReferenceIndex).")
-      .def_readonly("source_points", &Result::source_points, "Finite source points used.")
       .def_readonly("source_non_finite_dropped", &Result::source_non_finite_dropped,
                     "Source rows dropped for a NaN or infinite coordinate.")
-      .def_readonly("reference_points", &Result::reference_points,
-                    "Finite reference points indexed.")
       .def_readonly("reference_non_finite_dropped", &Result::reference_non_finite_dropped,
                     "Reference rows dropped for a NaN or infinite coordinate.")
       .def_readonly("trace", &Result::trace, "Per-iteration Trace; empty unless record_trace=True.")

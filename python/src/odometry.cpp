@@ -48,7 +48,7 @@ Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
   BatchSettings batch;
   try {
     if (m.solver == Solver::sgd) {
-      if (m.cost) sgd.cost = *m.cost;
+      apply_method_cost(m, sgd, batch);
       sgd = with_overrides(sgd, overrides);
     } else {
       batch.cost = *m.cost;

@@ -119,7 +119,8 @@ std::string keyword_of(std::string_view name) {
 }
 
 // Names a reader of the Settings attributes may try, and the keyword that means it.
-constexpr std::array<std::pair<std::string_view, std::string_view>, 13> kSuggestions{{
+constexpr std::array<std::pair<std::string_view, std::string_view>, 14> kSuggestions{{
+    {"voxel_size_m", "voxel_size"},
     {"max_correspondence_distance", "max_distance"},
     {"max_path_efficiency", "path_efficiency"},
     {"average_iterates", "average"},
@@ -263,17 +264,19 @@ std::string kernel_name(KernelType t) {
 std::string repr(const SgdSettings& s) {
   return py::str(
              "Settings(batch_size={!r}, max_correspondence_distance={}, optimizer={}, "
-             "convergence={}, refinement={}, cost=CostType.{}, kernel=KernelType.{}, "
+             "convergence={}, refinement={}, cost=CostType.{}, coarse_cost=CostType.{}, "
+             "kernel=KernelType.{}, "
              "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
              "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
              "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r}, "
-             "uncertainty={})")
+             "voxel_size_m={!r}, downsample_to={!r}, uncertainty={})")
       .format(s.batch_size, repr(s.max_correspondence_distance), repr(s.optimizer),
-              repr(s.convergence), repr(s.refinement), cost_name(s.cost), kernel_name(s.kernel),
-              repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
+              repr(s.convergence), repr(s.refinement), cost_name(s.cost), cost_name(s.coarse_cost),
+              kernel_name(s.kernel), repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
               s.scaling_origin == ScalingOrigin::center ? "center" : "lower_corner",
               s.max_iterations, s.seed, s.average_iterates, s.evaluation_points, s.record_trace,
-              s.check_degeneracy, s.robust_scaling, s.num_threads, repr(s.uncertainty));
+              s.check_degeneracy, s.robust_scaling, s.num_threads, s.voxel_size_m, s.downsample_to,
+              repr(s.uncertainty));
 }
 
 std::string repr(const BatchSettings& s) {
@@ -282,11 +285,13 @@ std::string repr(const BatchSettings& s) {
              "kernel=KernelType.{}, kernel_scale={}, trim_ratio={!r}, max_iterations={!r}, "
              "translation_tolerance={!r}, rotation_tolerance={!r}, initial_damping={!r}, "
              "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r}, "
-             "record_trace={!r}, robust_scaling={!r}, num_threads={!r})")
+             "record_trace={!r}, robust_scaling={!r}, num_threads={!r}, voxel_size_m={!r}, "
+             "downsample_to={!r})")
       .format(cost_name(s.cost), repr(s.max_correspondence_distance), kernel_name(s.kernel),
               repr(s.kernel_scale), s.trim_ratio, s.max_iterations, s.translation_tolerance,
               s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
-              s.check_degeneracy, s.record_trace, s.robust_scaling, s.num_threads);
+              s.check_degeneracy, s.record_trace, s.robust_scaling, s.num_threads, s.voxel_size_m,
+              s.downsample_to);
 }
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
 template <typename T>
@@ -320,6 +325,28 @@ void def_flag(py::class_<Class>& c, const char* name, bool Class::*member, const
       name, [member](const Class& s) { return s.*member; },
       [member, name](Class& s, const py::handle& v) { s.*member = as_bool(v, name); }, doc);
 }
+
+// voxel_size_m and downsample_to, which both settings classes have (settings.hpp).
+template <typename Class>
+void def_voxel_grid(py::class_<Class>& c, const char* size_doc, const char* count_doc) {
+  c.def_property(
+      "voxel_size_m", [](const Class& s) { return s.voxel_size_m; },
+      [](Class& s, const py::handle& v) { s.voxel_size_m = as_real(v, "voxel_size_m"); }, size_doc);
+  c.def_property(
+      "downsample_to", [](const Class& s) { return s.downsample_to; },
+      [](Class& s, const py::handle& v) {
+        s.downsample_to = static_cast<std::size_t>(as_count(v, "downsample_to"));
+      },
+      count_doc);
+}
+
+#define SGDICP_VOXEL_SIZE_DOC                                                                \
+  "Thin both clouds to one point (the centroid) per voxel of this side before registering, " \
+  "metres; 0 = the grid downsample_to chooses. Default 0."
+#define SGDICP_DOWNSAMPLE_TO_DOC                                                             \
+  "Without voxel_size_m: the voxel grid that keeps about this many points of the reference " \
+  "(chosen from the data, +-15 %), applied to both clouds; clouds with at most this many "   \
+  "points, or with normals given, are used as they are; 0 = no downsampling."
 
 template <typename Class>
 void def_distance(py::class_<Class>& c, const char* name, Distance Class::*member,
@@ -671,8 +698,17 @@ void bind_sgd_settings(py::module_& m) {
           "cost", [](const SgdSettings& s) { return s.cost; },
           [](SgdSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); },
           "Cost of a pair: CostType or its name ('point-to-point', 'point-to-plane', "
-          "'plane-to-plane'). The plane costs need reference normals / covariances. Default "
-          "CostType.point_to_point.")
+          "'plane-to-plane'). The plane costs need reference normals / covariances (estimated "
+          "for the pairs a run uses). Default CostType.point_to_plane (Settings.paper(): "
+          "point_to_point).")
+      .def_property(
+          "coarse_cost", [](const SgdSettings& s) { return s.coarse_cost; },
+          [](SgdSettings& s, const py::handle& v) {
+            s.coarse_cost = cost_from_object(v, "coarse_cost");
+          },
+          "Cost of the first (coarse) stage when refinement stages follow; the refinement "
+          "stages and the result use cost. Default CostType.point_to_point (the paper's wide "
+          "basin).")
       .def_property(
           "kernel", [](const SgdSettings& s) { return s.kernel; },
           [](SgdSettings& s, const py::handle& v) {
@@ -717,6 +753,10 @@ void bind_sgd_settings(py::module_& m) {
   def_count(settings, "num_threads", &SgdSettings::num_threads,
             "Threads of one registration (today its KD-tree build, when the reference is given "
             "as points); 0 = every core. The result is the same for any count. Default 1.");
+  def_voxel_grid(settings, SGDICP_VOXEL_SIZE_DOC,
+                 SGDICP_DOWNSAMPLE_TO_DOC
+                 " Default 20000 (a KITTI scan or a Kinect frame on a "
+                 "grid near small_gicp's recommended 0.25 m / 2 cm).");
   def_value_methods(settings);
 }
 
@@ -810,6 +850,8 @@ void bind_batch_settings(py::module_& m) {
            "hostage to a few far points. Default True.");
   def_count(batch, "num_threads", &BatchSettings::num_threads,
             "Threads of one registration (its KD-tree build); 0 = every core. Default 1.");
+  def_voxel_grid(batch, SGDICP_VOXEL_SIZE_DOC,
+                 SGDICP_DOWNSAMPLE_TO_DOC " Default 0 (the batch baselines use every point).");
   def_flag(batch, "record_trace", &BatchSettings::record_trace,
            "Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, "
            "pairs, mean squared pair distance). Default False.");

@@ -40,7 +40,10 @@ DEFAULTS = {
     "refinement.step_decay": 0.5,
     "refinement.distance_factor": 3.0,
     "refinement.min_distance": Distance.scaled(1e-4),
-    "cost": CostType.point_to_point,
+    "cost": CostType.point_to_plane,
+    "coarse_cost": CostType.point_to_point,
+    "voxel_size_m": 0.0,
+    "downsample_to": 20000,
     "kernel": KernelType.none,
     "kernel_scale": Distance.scaled(0.01),
     "trim_ratio": 1.0,
@@ -63,6 +66,8 @@ PAPER_CHANGES = {
     "refinement.stages": 0,
     "scaling_origin": ScalingOrigin.lower_corner,
     "average_iterates": False,
+    "cost": CostType.point_to_point,
+    "downsample_to": 0,
 }
 
 

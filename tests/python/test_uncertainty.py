@@ -78,7 +78,9 @@ def analytic_covariance(src, theta):
 
 def test_laplace_matches_the_analytic_covariance(surface):
     src, ref, theta, normals = surface
-    r = sgd_icp.register(src, ref, uncertainty="laplace", temper=False)
+    # Every point, so that the estimate describes the residuals the analytic formula sums.
+    r = sgd_icp.register(src, ref, method="sgd-point", uncertainty="laplace", temper=False,
+                         downsample_to=0)
     assert r.converged
     assert r.covariance.shape == (6, 6) and r.covariance_se3.shape == (6, 6)
     expected = surface_covariance(src, theta, normals)
@@ -91,14 +93,16 @@ def test_laplace_matches_the_analytic_covariance(surface):
 
 def test_sgld_samples_are_reproducible_and_near_laplace(problem):
     src, ref, theta = problem
-    a = sgd_icp.register(src, ref, uncertainty="sgld", uncertainty_samples=400, temper=False)
-    b = sgd_icp.register(src, ref, uncertainty="sgld", uncertainty_samples=400, temper=False)
+    # The point-to-point model of analytic_covariance, on every point.
+    kw = dict(method="sgd-point", downsample_to=0, uncertainty_samples=400, temper=False)
+    a = sgd_icp.register(src, ref, uncertainty="sgld", **kw)
+    b = sgd_icp.register(src, ref, uncertainty="sgld", **kw)
     assert a.samples.shape == (400, 6) and a.sample_mean.shape == (6,)
     assert np.array_equal(a.samples, b.samples)
     np.testing.assert_allclose(a.sample_mean, a.samples.mean(axis=0), atol=1e-9)
     ratio = np.sqrt(np.diag(a.covariance) / np.diag(analytic_covariance(src, theta)))
     assert np.all((ratio > 0.7) & (ratio < 1.4)), ratio
-    c = sgd_icp.register(src, ref, uncertainty="sgld", uncertainty_samples=400, temper=False, seed=7)
+    c = sgd_icp.register(src, ref, uncertainty="sgld", seed=7, **kw)
     assert not np.array_equal(a.samples, c.samples)
 
 
