@@ -45,7 +45,7 @@ Eigen::Vector3d reference_normal(const ReferenceIndex& reference, std::uint32_t 
 
 void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
                         double max_distance_m, const EvaluationSettings& settings,
-                        RegistrationResult& result) {
+                        RegistrationResult& result, const ReferenceNormals& normals) {
   const std::size_t n = source.size();
   const std::size_t samples =
       settings.evaluation_points == 0 ? n : std::min(n, settings.evaluation_points);
@@ -116,8 +116,9 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
   const std::size_t used = std::min(pairs.size(), settings.degeneracy_pairs);
   for (std::size_t k = 0; k < used; ++k) {
     const auto& p = pairs[sample_index(k, used, pairs.size())];
-    const Eigen::Vector3d normal =
-        reference_normal(reference, p.reference_index, settings.normal_neighbors, scratch);
+    const Eigen::Vector3d normal = normals ? normals(p.reference_index).cast<double>()
+                                           : reference_normal(reference, p.reference_index,
+                                                              settings.normal_neighbors, scratch);
     const Eigen::Vector3d q = (p.moved - centroid) / spread;
     Eigen::Matrix<double, 6, 1> j;
     j << normal, q.cross(normal);

@@ -51,6 +51,10 @@ class MiniBatchPairing {
     use_cost(settings.cost);
   }
 
+  [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
+    return reference_surfaces_.normal(i);
+  }
+
   // The cost of the pairs from now on (the coarse stage may pair with another, SgdRun).
   void use_cost(CostType cost) {
     cost_ = cost;
@@ -217,6 +221,11 @@ class SgdRun {
                                with_hessian, distances_);
   }
 
+  // The normal of reference point i, from the cloud or estimated once (as the plane costs do).
+  [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
+    return pairing_.reference_normal(i);
+  }
+
   // d_max at the end of the run, scaled.
   [[nodiscard]] double max_distance() const { return schedule_.max_distance(); }
 
@@ -314,9 +323,10 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
     theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);
   }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
+  // The degeneracy check reads the reference normals the run estimated (or would have).
   detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
-                   EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
-                   clock);
+                   EvaluationSettings{settings.evaluation_points, settings.check_degeneracy}, clock,
+                   [&run](std::uint32_t i) { return run.reference_normal(i); });
   frame.to_clouds(result);
   return result;
 }

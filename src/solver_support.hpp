@@ -180,9 +180,10 @@ inline void set_stop(RegistrationResult& result, StopReason reason, std::string 
 /// Fills the final statistics of result.T_reference_source and the time of the whole run.
 inline void conclude(RegistrationResult& result, const PointCloud& source,
                      const ReferenceIndex& reference, double max_distance_m,
-                     const EvaluationSettings& evaluation, const Stopwatch& clock) {
+                     const EvaluationSettings& evaluation, const Stopwatch& clock,
+                     const ReferenceNormals& normals = {}) {
   result.final_max_distance_m = max_distance_m;
-  evaluate_alignment(source, reference, max_distance_m, evaluation, result);
+  evaluate_alignment(source, reference, max_distance_m, evaluation, result, normals);
   result.time_ms = clock.elapsed_ms();
 }
 
@@ -199,6 +200,13 @@ template <typename Settings>
                                                             .voxel_size_m = voxel_m});
   if (when == SurfaceEstimation::eager) {
     prepare_reference(index, settings.cost, settings.neighborhood);
+  } else if (settings.num_threads != 1) {
+    // The refinement stages pair nearly every point of the grid, which a lone thread estimates
+    // one by one as pairs need them: with threads to spare, estimate them all at once. The same
+    // estimator gives the same values, so the same result as one thread.
+    NeighborhoodSettings threaded = settings.neighborhood;
+    threaded.num_threads = settings.num_threads;
+    prepare_reference(index, settings.cost, threaded);
   }
   return index;
 }

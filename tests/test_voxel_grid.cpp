@@ -199,6 +199,31 @@ TEST(RegistrationVoxelGrid, AGridTooCoarseForTheMiniBatchIsAClearError) {
   }
 }
 
+// With threads, the reference's normals (or covariances) are estimated all at once on the grid
+// instead of one by one in the run: the same values, so the same result, to the bit.
+TEST(RegistrationVoxelGrid, ThreadsGiveTheSameResult) {
+  const Eigen::Matrix4d T_gt = make_transform(2 * kDeg, -1 * kDeg, 6 * kDeg, {0.1, -0.05, 0.03});
+  const PointCloud source = synthetic_scene(41);
+  const PointCloud reference = transformed(synthetic_scene(42), T_gt);
+  for (const char* name : {"sgd", "sgd-point", "sgd-gicp"}) {
+    SCOPED_TRACE(name);
+    SgdSettings one;
+    BatchSettings unused;
+    apply_method_cost(method_from_string(name), one, unused);
+    one.downsample_to = 8000;
+    SgdSettings two = one;
+    two.num_threads = 2;
+    const ReferenceIndex threaded = reference_index_for(reference, two);
+    EXPECT_EQ(threaded.cloud().has_normals(), one.cost != CostType::point_to_point);
+    const RegistrationResult a = align(source, reference, one);
+    const RegistrationResult b = align(source, threaded, two);
+    EXPECT_EQ(a.T_reference_source, b.T_reference_source);
+    EXPECT_EQ(a.iterations, b.iterations);
+    EXPECT_EQ(a.constraint_ratio, b.constraint_ratio);
+    EXPECT_EQ(a.inlier_rmse_m, b.inlier_rmse_m);
+  }
+}
+
 // The coarse stage's cost applies to the first stage only, and only when refinement stages
 // follow; a method named for its cost uses it throughout.
 TEST(CoarseCost, OnlyTheFirstStageOfARefinedRun) {

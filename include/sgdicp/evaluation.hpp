@@ -11,6 +11,8 @@
 // report the smallest over the largest eigenvalue; the result is flagged degenerate below
 // `degenerate_below`.
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 
 #include <Eigen/Core>
 
@@ -34,10 +36,16 @@ struct EvaluationSettings {
   std::size_t normal_neighbors = 10;
 };
 
+/// The unit normal of reference point i (or zero where the surface defines none).
+using ReferenceNormals = std::function<Eigen::Vector3f(std::uint32_t)>;
+
 /// Fills result.evaluated_points, inliers, inlier_ratio, inlier_rmse_m, constraint_ratio and
 /// degenerate for the transform in result.T_reference_source and pairs within max_distance_m.
+/// The degeneracy check takes the reference normals from `normals` when given (a registration's
+/// own, so that they are the ones its cost used), else from the cloud, else from a PCA of
+/// settings.normal_neighbors neighbours.
 void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
                         double max_distance_m, const EvaluationSettings& settings,
-                        RegistrationResult& result);
+                        RegistrationResult& result, const ReferenceNormals& normals = {});
 
 }  // namespace sgdicp
