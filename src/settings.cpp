@@ -420,6 +420,14 @@ std::vector<Setting<S>> stop_settings() {
       setting<S, &S::refinement, &R::min_distance>({"min-distance", "refinement.min_distance",
                                                     kScaledRange, "",
                                                     "Refinement: lower bound of d_max"}),
+      setting<S, &S::refinement, &R::gauss_newton>(
+          {"refine-gauss-newton",
+           "refinement.gauss_newton",
+           {},
+           "",
+           "Refinement: the refinement stages take Gauss-Newton steps (the gauss-newton rule at "
+           "its own step, times the stage's multiplier) whatever the coarse stage's rule, "
+           "except with a robust kernel or trimming"}),
   };
 }
 

@@ -261,6 +261,28 @@ TEST(CoarseCost, OnlyTheFirstStageOfARefinedRun) {
   EXPECT_EQ(untouched, SgdSettings{});
 }
 
+// The refinement stages step with Gauss-Newton (step 1 x the stage's multiplier) after Adam's
+// coarse stage (0.01); with the flag off, Adam throughout, as before the fifth round.
+TEST(RefinementGaussNewton, TheRefinementStagesStepWithGaussNewton) {
+  const Eigen::Matrix4d T_gt = make_transform(2 * kDeg, -1 * kDeg, 6 * kDeg, {0.1, -0.05, 0.03});
+  const PointCloud source = synthetic_scene(41, 20000);
+  const PointCloud reference = transformed(synthetic_scene(42, 20000), T_gt);
+  SgdSettings s;
+  s.record_trace = true;
+  ASSERT_TRUE(s.refinement.gauss_newton);
+  const RegistrationResult newton = align(source, reference, s);
+  EXPECT_TRUE(newton.converged) << newton.message;
+  EXPECT_LT(translation_error(newton.T_reference_source, T_gt), 0.01);
+  ASSERT_FALSE(newton.trace.empty());
+  EXPECT_DOUBLE_EQ(newton.trace.front().step_size, 0.01);  // Adam, coarse stage
+  EXPECT_DOUBLE_EQ(newton.trace.back().step_size, 0.125);  // Gauss-Newton 1 x 0.5^3
+  s.refinement.gauss_newton = false;
+  const RegistrationResult adam = align(source, reference, s);
+  EXPECT_DOUBLE_EQ(adam.trace.back().step_size, 0.01 * 0.125);
+  EXPECT_NE(adam.T_reference_source, newton.T_reference_source);
+  EXPECT_LT(translation_error(adam.T_reference_source, T_gt), 0.01);
+}
+
 // The paper's strength, kept by the default: KITTI scans started exactly 30 m and 30 deg from
 // the ground truth. Point-to-plane from the first mini-batch solved 70-75 % of such starts
 // (28 of 40 and 14 of 20, `sgdicp bench --perturb 30,0.5236 --repeat 5`), the default's

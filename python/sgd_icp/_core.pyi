@@ -263,6 +263,11 @@ class RefinementSettings:
     """Refinement: lower bound of d_max, a Distance in [1e-06, 10] scaled units or [1e-06, 1000000]
     m. Keyword min_distance=. Default Distance.scaled(0.0001).
     """
+    gauss_newton: bool
+    """Refinement: the refinement stages take Gauss-Newton steps (the gauss-newton rule at its own
+    step, times the stage's multiplier) whatever the coarse stage's rule, except with a robust
+    kernel or trimming. Keyword refine_gauss_newton=. Default True.
+    """
 
     def __init__(self) -> None: ...
     def __eq__(self, other: object) -> bool: ...
@@ -462,6 +467,7 @@ class Settings:
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
+        refine_gauss_newton: bool = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         cost: _CostName = ...,
@@ -513,6 +519,7 @@ class Settings:
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
+        refine_gauss_newton: bool = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         cost: _CostName = ...,
@@ -567,6 +574,7 @@ class Settings:
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
+        refine_gauss_newton: bool = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         cost: _CostName = ...,
@@ -991,6 +999,7 @@ def register(
     step_decay: float = ...,
     distance_factor: float = ...,
     min_distance: _DistanceValue = ...,
+    refine_gauss_newton: bool = ...,
     average: bool = ...,
     scaling_origin: _OriginName = ...,
     cost: _CostName = ...,
@@ -1063,7 +1072,7 @@ def register(
         window (20, [8, 100000]), chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
         translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]),
         refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
-        min_distance (Distance.scaled(0.0001)), average (True),
+        min_distance (Distance.scaled(0.0001)), refine_gauss_newton (True), average (True),
         scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_plane), coarse_cost (CostType.point_to_point),
         kernel (KernelType.none), kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]),

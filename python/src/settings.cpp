@@ -229,8 +229,8 @@ std::string repr(const ConvergenceSettings& c) {
 std::string repr(const RefinementSettings& r) {
   return py::str(
              "RefinementSettings(stages={!r}, step_decay={!r}, distance_factor={!r}, "
-             "min_distance={})")
-      .format(r.stages, r.step_decay, r.distance_factor, repr(r.min_distance));
+             "min_distance={}, gauss_newton={!r})")
+      .format(r.stages, r.step_decay, r.distance_factor, repr(r.min_distance), r.gauss_newton);
 }
 
 std::string repr(const NeighborhoodSettings& n) {
@@ -609,6 +609,9 @@ void bind_convergence(py::module_& m) {
                      "Step-size multiplier per stage, in (0, 1]. Default 0.5.")
       .def_readwrite("distance_factor", &RefinementSettings::distance_factor,
                      "New d_max = factor x median pair distance of the stage. Default 3.");
+  def_flag(refinement, "gauss_newton", &RefinementSettings::gauss_newton,
+           "The refinement stages take Gauss-Newton steps whatever the coarse stage's rule. "
+           "Default True.");
   def_distance(refinement, "min_distance", &RefinementSettings::min_distance,
                "Floor of d_max, a Distance. Default Distance.scaled(1e-4).");
   def_value_methods(refinement);
