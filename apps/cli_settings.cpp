@@ -212,6 +212,8 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
   m.name = std::string(method.name);
   m.stochastic = method.solver == Solver::sgd;
   m.sgd = o.preset == "paper" ? SgdSettings::paper() : SgdSettings{};
+  // The method's cost first, so that an explicit --coarse-cost still sets the first stage's.
+  apply_method_cost(method, m.sgd, m.batch);
   auto values = o.values;
   if (o.preconditioner == "gauss-newton") {
     const auto given = values.find("optimizer");
@@ -230,7 +232,6 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
     apply(m.sgd, s, value);
     if (const auto* b = find_batch_setting(s.name)) apply(m.batch, *b, value);
   }
-  apply_method_cost(method, m.sgd, m.batch);
   m.random_ratio = preprocessing_option(o.random_ratio, "--random-ratio", kRandomRatio, "");
   m.sgd.validate(SettingNames::cli);
   m.batch.validate(SettingNames::cli);

@@ -319,6 +319,17 @@ if [ "$rc" -eq 0 ] && cmp -s "$tmp/corner_T.txt" "$tmp/lower_corner_T.txt" &&
 else
   fail "--scaling-origin spellings differ (exit $rc)"
 fi
+# The default (`sgd`) is a point-to-point coarse stage and point-to-plane refinement: the same
+# as sgd-plane with --coarse-cost point-to-point, and not the same as sgd-plane (plane throughout).
+run register "$MOVED" "$REF" --output "$tmp/default_T.txt"
+run register "$MOVED" "$REF" --method sgd-plane --coarse-cost point-to-point --output "$tmp/hybrid_T.txt"
+run register "$MOVED" "$REF" --method sgd-plane --output "$tmp/plane_T.txt"
+if [ "$rc" -eq 0 ] && cmp -s "$tmp/default_T.txt" "$tmp/hybrid_T.txt" &&
+  ! cmp -s "$tmp/default_T.txt" "$tmp/plane_T.txt"; then
+  pass "--coarse-cost after --method sgd-plane sets the first stage's cost"
+else
+  fail "--method sgd-plane --coarse-cost point-to-point is not the default (exit $rc)"
+fi
 # One table of step sizes: --preset paper with --optimizer gauss-newton and with
 # --preconditioner gauss-newton are the same run (they ran 100x apart in step size before).
 run register "$MOVED" "$REF" --preset paper --optimizer gauss-newton --trace "$tmp/gn_opt.csv"
