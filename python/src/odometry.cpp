@@ -39,6 +39,12 @@ OdometrySettings take_odometry_keywords(py::dict& overrides) {
 Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
   py::dict overrides(kwargs);
   const OdometrySettings settings = take_odometry_keywords(overrides);
+  // voxel_size= was taken as the map's; the registration's own grid has no place here.
+  if (overrides.contains("downsample_to")) {
+    throw InvalidSettingsError(
+        "downsample_to= does not apply to the odometry: it thins frames and map on its own "
+        "voxel grid (voxel_size=)");
+  }
   const Method& m = method_from_string(method);
   if (m.cost && overrides.contains("cost")) {
     throw InvalidSettingsError("method='" + std::string(m.name) +

@@ -91,6 +91,9 @@ def test_keywords_are_the_cli_options():
         sgd_icp.Odometry(voxel_size="big")
     with pytest.raises(sgd_icp.InvalidSettingsError):
         sgd_icp.Odometry(method="nope")
+    # The odometry thins frames and map itself: the registration's grid is refused, not ignored.
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="downsample_to"):
+        sgd_icp.Odometry(downsample_to=5000)
 
 
 def test_a_fixed_max_distance_turns_the_adaptive_threshold_off():
