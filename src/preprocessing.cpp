@@ -235,8 +235,23 @@ class VoxelSlots {
 
   [[nodiscard]] std::size_t size() const { return size_; }
 
-  // The slot of `key`, a new one (= size() before the call) if it was not there.
+  // The slot of `key`, a new one (= size() before the call) if it was not there. Scans and
+  // depth images visit a voxel in runs: the table is probed only when the key changes.
   std::size_t slot(const VoxelKey& key) {
+    if (size_ > 0 && key == last_key_) return last_slot_;
+    last_key_ = key;
+    last_slot_ = find_or_add(key);
+    return last_slot_;
+  }
+
+ private:
+  static constexpr std::size_t kEmpty = std::numeric_limits<std::size_t>::max();
+  struct Entry {
+    VoxelKey key;
+    std::size_t slot = kEmpty;
+  };
+
+  std::size_t find_or_add(const VoxelKey& key) {
     if (2 * (size_ + 1) > entries_.size()) rehash(2 * entries_.size());
     const std::size_t mask = entries_.size() - 1;
     for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
@@ -248,13 +263,6 @@ class VoxelSlots {
       if (e.key == key) return e.slot;
     }
   }
-
- private:
-  static constexpr std::size_t kEmpty = std::numeric_limits<std::size_t>::max();
-  struct Entry {
-    VoxelKey key;
-    std::size_t slot = kEmpty;
-  };
 
   void rehash(std::size_t capacity) {
     std::vector<Entry> old(capacity);
@@ -270,6 +278,8 @@ class VoxelSlots {
 
   std::vector<Entry> entries_;
   std::size_t size_ = 0;
+  VoxelKey last_key_;
+  std::size_t last_slot_ = 0;
 };
 
 // Voxel indices stay well inside int64 so that neighbouring-voxel arithmetic by callers and
@@ -283,9 +293,6 @@ void check_voxel_size(double voxel_size_m) {
   }
 }
 
-// The voxel of a point. The range of the indices is checked once, on the cloud's extreme
-// coordinates, so that the per-point key is a few inlined floors (it was 30 % of a downsampling
-// as a checked call per coordinate).
 // The largest |coordinate| of a cloud; InvalidInputError for a non-finite point.
 float largest_coordinate(const PointCloud& cloud) {
   float largest = 0.0F;
@@ -299,6 +306,9 @@ float largest_coordinate(const PointCloud& cloud) {
   return largest;
 }
 
+// The voxel of a point. The range of the indices is checked once, on the cloud's extreme
+// coordinates, so that the per-point key is a few inlined floors (it was 30 % of a downsampling
+// as a checked call per coordinate).
 class VoxelGrid {
  public:
   // `largest`: the cloud's largest_coordinate.
@@ -326,37 +336,15 @@ class VoxelGrid {
   double size_;
 };
 
-// Occupied voxels of the grid, counting stopped once above `limit`. A set of 64-bit hashes of
-// the voxels (8 bytes a slot, so it stays in cache): two voxels whose keys hash alike, which is
-// rare, would count once, which does not matter to an estimate.
+// Occupied voxels of the grid, counting stopped once above `limit`.
 std::size_t occupied_voxels(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
                             std::size_t limit) {
-  std::vector<std::uint64_t> set(std::bit_ceil(std::max<std::size_t>(64, 2 * expected)), 0);
-  std::size_t count = 0;
-  std::uint64_t last = 0;
+  VoxelSlots slots(expected);  // grows as needed: a table sized for `limit` costs more to clear
   for (const Eigen::Vector3f& p : cloud.points) {
-    const std::uint64_t h = std::max<std::uint64_t>(1, hash_of(grid.key(p)));  // 0 = empty
-    if (h == last) continue;  // scans and depth images visit a voxel in runs
-    last = h;
-    if (2 * (count + 1) > set.size()) {  // grow: re-insert into twice the slots
-      std::vector<std::uint64_t> old(2 * set.size(), 0);
-      old.swap(set);
-      for (const std::uint64_t k : old) {
-        if (k == 0) continue;
-        std::size_t i = k & (set.size() - 1);
-        while (set[i] != 0) i = (i + 1) & (set.size() - 1);
-        set[i] = k;
-      }
-    }
-    const std::size_t mask = set.size() - 1;
-    std::size_t i = h & mask;
-    while (set[i] != 0 && set[i] != h) i = (i + 1) & mask;
-    if (set[i] == 0) {
-      set[i] = h;
-      if (++count > limit) break;
-    }
+    slots.slot(grid.key(p));
+    if (slots.size() > limit) break;
   }
-  return count;
+  return slots.size();
 }
 
 // ---- random subsets ----
@@ -439,15 +427,8 @@ PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m) {
   VoxelSlots slots(cloud.size() / 8);
   std::vector<Eigen::Vector3d> sums;
   std::vector<std::size_t> counts;
-  VoxelKey last_key{0, 0, 0};
-  std::size_t slot = std::numeric_limits<std::size_t>::max();
   for (const Eigen::Vector3f& p : cloud.points) {
-    const VoxelKey key = grid.key(p);
-    // Scans and depth images visit a voxel in runs: look it up only when it changes.
-    if (slot == std::numeric_limits<std::size_t>::max() || !(key == last_key)) {
-      slot = slots.slot(key);
-      last_key = key;
-    }
+    const std::size_t slot = slots.slot(grid.key(p));
     if (slot == sums.size()) {
       sums.emplace_back(Eigen::Vector3d::Zero());
       counts.push_back(0);
