@@ -69,10 +69,6 @@ RegistrationResult run(const Method& m, const PointCloud& source, const PointClo
   return align_batch(source, index, b);
 }
 
-std::filesystem::path shared(const std::string& relative) {
-  return std::filesystem::path(SGDICP_SHARED_DATA) / relative;
-}
-
 class EveryMethod : public ::testing::TestWithParam<Method> {};
 
 // The synthetic scene of test_registration: independent samplings ~4 cm apart with 2 mm noise,
@@ -120,7 +116,7 @@ TEST_P(EveryMethod, TraceDescribesEveryIteration) {
 // 1-2 cm / 0.1 deg (PROVENANCE.md); each cost's optimum lies a few cm from it. Measured: SGD
 // variants 1.8-2.5 cm, batch 4-9 cm, all within 0.5 deg.
 TEST_P(EveryMethod, RegistersTheCarPair) {
-  const auto file = shared("pairs/libpointmatcher_car.txt");
+  const auto file = test::shared_data("pairs/libpointmatcher_car.txt");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
   const RegistrationPair pair = read_pairs_file(file).front();
   const RegistrationResult r =
@@ -132,7 +128,7 @@ TEST_P(EveryMethod, RegistersTheCarPair) {
 // ETH Kinect map vs. a copy moved by up to 0.5 m / 30 deg: exact ground truth, every point has
 // its twin, so every method must reach the mm level (measured: 1e-7 m SGD, 1e-9 m batch).
 TEST_P(EveryMethod, RegistersAMovedKinectMapCopy) {
-  const auto file = shared("pairs/eth_kinect_map_moved_copies.txt");
+  const auto file = test::shared_data("pairs/eth_kinect_map_moved_copies.txt");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
   const RegistrationPair pair = read_pairs_file(file).at(1);
   const RegistrationResult r =
@@ -144,7 +140,7 @@ TEST_P(EveryMethod, RegistersAMovedKinectMapCopy) {
 // Consecutive KITTI scans: pseudo ground truth good to 2-9 cm (PROVENANCE.md); every method
 // lands within 1 cm of it on this pair (measured 0.04-0.3 cm), 5 cm / 0.2 deg is the bar.
 TEST_P(EveryMethod, RegistersConsecutiveKittiScans) {
-  const auto file = shared("pairs/kitti_seq00.txt");
+  const auto file = test::shared_data("pairs/kitti_seq00.txt");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
   const RegistrationPair pair = read_pairs_file(file).front();
   const RegistrationResult r =
@@ -186,7 +182,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, EveryMethod, ::testing::ValuesIn(all_methods()
 // (points with x above the median). Plain point-to-point SGD-ICP is pulled far off (measured
 // 20 m / 15 deg); robust kernels and trimming must do measurably better.
 TEST(PartialOverlap, RobustAndTrimmedVariantsBeatPlainPointToPoint) {
-  const auto file = shared("pairs/libpointmatcher_car.txt");
+  const auto file = test::shared_data("pairs/libpointmatcher_car.txt");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
   const RegistrationPair pair = read_pairs_file(file).front();
   const PointCloud source = read_point_cloud(pair.source).cloud;

@@ -22,10 +22,6 @@ using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
 
-std::filesystem::path shared(const std::string& relative) {
-  return std::filesystem::path(SGDICP_SHARED_DATA) / relative;
-}
-
 #define SKIP_WITHOUT(path) \
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << (path)
 
@@ -341,7 +337,7 @@ TEST(RealData, KittiMovedCopiesTableII) {
   // still fails any wrong basin by three orders of magnitude. On the default voxel grid (~0.3 m)
   // the twins fall into differently placed voxels and their centroids differ by up to a voxel:
   // 2 cm / 0.03 deg there, still far from any wrong basin.
-  const auto file = shared("pairs/kitti_seq00_moved_copies.txt");
+  const auto file = test::shared_data("pairs/kitti_seq00_moved_copies.txt");
   SKIP_WITHOUT(file);
   for (const auto& pair : read_pairs_file(file)) {
     SCOPED_TRACE(pair.reference.filename().string());
@@ -370,7 +366,7 @@ TEST(RealData, LibpointmatcherCarPair) {
   // libpointmatcher's ground truth agrees with its own regression ICP to 7.8 mm / 0.08 deg, and
   // point-to-point ICP started at the ground truth drifts 1.8 cm / 0.08 deg (PROVENANCE.md): the
   // point-to-point optimum itself is a couple of cm and a few tenths of a degree away.
-  const auto file = shared("pairs/libpointmatcher_car.txt");
+  const auto file = test::shared_data("pairs/libpointmatcher_car.txt");
   SKIP_WITHOUT(file);
   for (const auto& pair : read_pairs_file(file)) {
     SCOPED_TRACE(pair.source.filename().string());
@@ -384,7 +380,7 @@ TEST(RealData, LibpointmatcherCarPair) {
 TEST(RealData, BunnyPair) {
   // Sub-mm ground truth, but 361 sparse points: PROVENANCE.md notes plain point-to-point ICP from
   // identity stops 3.9 deg short of it. We require 2 mm and better than that 3.9 deg.
-  const auto file = shared("pairs/pcl_bunny.txt");
+  const auto file = test::shared_data("pairs/pcl_bunny.txt");
   SKIP_WITHOUT(file);
   const PairRun run = run_pair(read_pairs_file(file).front(), SgdSettings{});
   EXPECT_TRUE(run.result.converged);
@@ -394,7 +390,7 @@ TEST(RealData, BunnyPair) {
 
 TEST(RealData, KittiConsecutiveScans) {
   // Pseudo ground truth good to 2-9 cm (PROVENANCE.md); batch point-to-point ICP gets 0.5-3 cm.
-  const auto file = shared("pairs/kitti_seq00.txt");
+  const auto file = test::shared_data("pairs/kitti_seq00.txt");
   SKIP_WITHOUT(file);
   const auto pairs = read_pairs_file(file);
   const PairRun run = run_pair(pairs.front(), SgdSettings{});

@@ -66,6 +66,13 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+#ifdef SGDICP_SHARED_DATA
+// A file or folder of the benchmark data beside the repository (../shared/data).
+inline std::filesystem::path shared_data(const std::string& relative) {
+  return std::filesystem::path(SGDICP_SHARED_DATA) / relative;
+}
+#endif
+
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // A small man-made scene without symmetries: a floor, two walls, a box and a ball, 60k points

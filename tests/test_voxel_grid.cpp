@@ -26,10 +26,6 @@ using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
 
-std::filesystem::path shared(const std::string& relative) {
-  return std::filesystem::path(SGDICP_SHARED_DATA) / relative;
-}
-
 double relative_error(std::size_t count, std::size_t target) {
   return std::abs(static_cast<double>(count) / static_cast<double>(target) - 1.0);
 }
@@ -72,8 +68,8 @@ TEST(VoxelSizeForCount, KeepsAboutTheTargetOnSurfacesVolumesAndLines) {
 }
 
 TEST(VoxelSizeForCount, RealCloudsKeepAboutTheTarget) {
-  const std::filesystem::path kitti = shared("kitti_odometry_seq00/velodyne/000000.bin");
-  const std::filesystem::path kinect = shared("pcl_kinect_frames");
+  const std::filesystem::path kitti = test::shared_data("kitti_odometry_seq00/velodyne/000000.bin");
+  const std::filesystem::path kinect = test::shared_data("pcl_kinect_frames");
   if (!std::filesystem::exists(kitti) || !std::filesystem::exists(kinect)) {
     GTEST_SKIP() << "missing shared data";
   }
@@ -288,7 +284,7 @@ TEST(RefinementGaussNewton, TheRefinementStagesStepWithGaussNewton) {
 // (28 of 40 and 14 of 20, `sgdicp bench --perturb 30,0.5236 --repeat 5`), the default's
 // point-to-point coarse stage all of them.
 TEST(CoarseCost, KittiStartsThirtyMetresAndDegreesOffAreSolved) {
-  const auto file = shared("pairs/kitti_seq00.txt");
+  const auto file = test::shared_data("pairs/kitti_seq00.txt");
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
   std::mt19937_64 rng(30);
   std::normal_distribution<double> gauss;
