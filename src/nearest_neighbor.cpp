@@ -257,6 +257,23 @@ ReferenceIndex::ReferenceIndex(PointCloud reference, const KdTreeSettings& setti
   impl_->voxel_size_m = settings.voxel_size_m;
 }
 
+ReferenceIndex ReferenceIndex::on_voxel_grid(PointCloud thinned, double voxel_size_m,
+                                             const KdTreeSettings& settings) {
+  if (!std::isfinite(voxel_size_m) || voxel_size_m <= 0.0) {
+    throw InvalidSettingsError(
+        "voxel size of a thinned reference must be positive and finite, got " +
+        std::to_string(voxel_size_m) + " m");
+  }
+  if (settings.voxel_size_m != 0.0) {
+    throw InvalidSettingsError(
+        "an index over a thinned reference thins it no further: "
+        "settings.voxel_size_m must be 0");
+  }
+  ReferenceIndex index(std::move(thinned), settings);
+  index.impl_->voxel_size_m = voxel_size_m;
+  return index;
+}
+
 void KdTreeSettings::validate() const {
   if (leaf_size == 0) throw InvalidSettingsError("kd-tree leaf size must be at least 1");
   if (num_threads > kMaxThreads) {

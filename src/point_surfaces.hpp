@@ -33,6 +33,14 @@ struct PointSurface {
                                             const NeighborhoodSettings& stored,
                                             std::vector<Neighbor>& neighbors);
 
+/// The reference cloud of a registration on a voxel grid of side voxel_size_m: the centroids
+/// (voxel_downsample), and, when `surfaces` and the cloud holds at least k/9 points per occupied
+/// voxel (a 3x3 patch of voxels across a surface then holds about k), each centroid's normal and
+/// covariance from the points of its 3x3x3 block (voxel_downsample_with_surfaces); otherwise the
+/// centroids alone, whose surfaces come from their k nearest centroids (PointSurfaces).
+[[nodiscard]] PointCloud registration_grid(const PointCloud& cloud, double voxel_size_m,
+                                           const NeighborhoodSettings& settings, bool surfaces);
+
 /// Normals and covariances of a cloud, read from it or estimated once per point on first use
 /// over `index`, a KD-tree over exactly that cloud (may be null when the cloud carries what its
 /// cost reads). One per run: not thread-safe.

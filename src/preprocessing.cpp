@@ -1,6 +1,7 @@
 #include "sgdicp/preprocessing.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cfloat>
 #include <cmath>
@@ -29,6 +30,8 @@ constexpr std::size_t kMinPointsPerThread = 512;
 // A neighbourhood whose second-largest eigenvalue is below this fraction of the largest is a
 // line (width < 1/1000 of its length): its normal is not defined.
 constexpr double kCollinearRatio = 1e-6;
+// describe_covariance: eigenvalue ratios below this are solved iteratively (see there).
+constexpr double kDirectSolveRatio = 1e-3;
 // Spreads below this many float ulps of the coordinates are rounding noise, not geometry.
 constexpr double kResolutionUlps = 16.0;
 // voxel_size_for_count: counting passes at most, and the relative error in the count that
@@ -121,6 +124,10 @@ void parallel_chunks(std::size_t n, std::size_t threads, const Body& body) {
 
 using detail::PointSurface;
 
+PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
+                                 const Eigen::Matrix3d& covariance, std::size_t count,
+                                 const NeighborhoodSettings& settings);
+
 // The neighbourhood summary of one point. Pure function of its inputs, hence identical
 // results for any thread count.
 PointSurface describe(const Eigen::Vector3f& point, const std::vector<Eigen::Vector3f>& points,
@@ -138,13 +145,24 @@ PointSurface describe(const Eigen::Vector3f& point, const std::vector<Eigen::Vec
     covariance.noalias() += d * d.transpose();
   }
   covariance /= n;
+  return describe_covariance(point, mean, covariance, neighbors.size(), settings);
+}
 
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
+                                 const Eigen::Matrix3d& covariance, std::size_t count,
+                                 const NeighborhoodSettings& settings) {
+  // The closed form costs a fraction of the iterative solver, but its smallest eigenvector
+  // loses precision when the two smallest eigenvalues are close (a line, a point, a blob):
+  // those neighbourhoods are solved again iteratively.
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(covariance);
+  const Eigen::Vector3d& direct = solver.eigenvalues();
+  if (!(direct[1] - direct[0] > kDirectSolveRatio * direct[2])) solver.compute(covariance);
   const Eigen::Vector3d& eigenvalues = solver.eigenvalues();  // ascending
   const double resolution = kResolutionUlps * FLT_EPSILON * mean.cwiseAbs().maxCoeff();
   const double floor = resolution * resolution;
   // Negated comparisons so that a NaN (which cannot arise from finite input) is degenerate too.
-  const bool degenerate = neighbors.size() < kMinNeighbors || solver.info() != Eigen::Success ||
+  const bool degenerate = count < kMinNeighbors || solver.info() != Eigen::Success ||
                           !(eigenvalues[2] > floor) ||
                           !(eigenvalues[1] > std::max(floor, kCollinearRatio * eigenvalues[2]));
 
@@ -235,6 +253,17 @@ class VoxelSlots {
 
   [[nodiscard]] std::size_t size() const { return size_; }
 
+  // The slot of `key`, or kNone when the voxel is empty.
+  static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+  [[nodiscard]] std::size_t find(const VoxelKey& key) const {
+    const std::size_t mask = entries_.size() - 1;
+    for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
+      const Entry& e = entries_[i];
+      if (e.slot == kEmpty) return kNone;
+      if (e.key == key) return e.slot;
+    }
+  }
+
   // The slot of `key`, a new one (= size() before the call) if it was not there. Scans and
   // depth images visit a voxel in runs: the table is probed only when the key changes.
   std::size_t slot(const VoxelKey& key) {
@@ -245,7 +274,7 @@ class VoxelSlots {
   }
 
  private:
-  static constexpr std::size_t kEmpty = std::numeric_limits<std::size_t>::max();
+  static constexpr std::size_t kEmpty = kNone;
   struct Entry {
     VoxelKey key;
     std::size_t slot = kEmpty;
@@ -347,6 +376,123 @@ std::size_t occupied_voxels(const PointCloud& cloud, const VoxelGrid& grid, std:
   return slots.size();
 }
 
+// What voxel_downsample keeps of a voxel: the sum of its points, for their centroid.
+struct Centroid {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double count = 0.0;
+
+  explicit Centroid(const VoxelKey& /*key*/) {}
+  void add(const Eigen::Vector3f& p) {
+    sum += p.cast<double>();
+    count += 1.0;
+  }
+  // Rounding is monotone, so the float centroid stays within its points' range: in their voxel.
+  [[nodiscard]] Eigen::Vector3f centroid() const { return (sum / count).cast<float>(); }
+};
+
+// What voxel_downsample_with_surfaces keeps: also the sum of the outer products (xx xy xz yy yz
+// zz) and the voxel's key, to find its neighbours. Sums of raw (uncentred) products add across
+// voxels; centring them at the end costs ~1e-16 |mean|^2, far below the float-resolution floor
+// under which describe_covariance calls a spread noise.
+struct Moments : Centroid {
+  std::array<double, 6> outer{};
+  VoxelKey key;
+
+  explicit Moments(const VoxelKey& k) : Centroid(k), key(k) {}
+  void add(const Eigen::Vector3f& p) {
+    Centroid::add(p);
+    const double x = p.x();
+    const double y = p.y();
+    const double z = p.z();
+    outer[0] += x * x;
+    outer[1] += x * y;
+    outer[2] += x * z;
+    outer[3] += y * y;
+    outer[4] += y * z;
+    outer[5] += z * z;
+  }
+};
+
+// Every occupied voxel of the grid, in the order of its first point, with what Voxel keeps.
+template <class Voxel>
+struct VoxelTable {
+  VoxelSlots slots;
+  std::vector<Voxel> voxels;
+};
+
+template <class Voxel>
+VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m) {
+  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
+  VoxelTable<Voxel> table{VoxelSlots(cloud.size() / 8), {}};
+  for (const Eigen::Vector3f& p : cloud.points) {
+    const VoxelKey key = grid.key(p);
+    const std::size_t slot = table.slots.slot(key);
+    if (slot == table.voxels.size()) table.voxels.emplace_back(key);
+    table.voxels[slot].add(p);
+  }
+  return table;
+}
+
+// The centroids of a table's voxels, as a cloud measured from origin_m.
+template <class Voxel>
+PointCloud centroids_of(const std::vector<Voxel>& voxels, const Eigen::Vector3d& origin_m) {
+  PointCloud out;
+  out.origin_m = origin_m;
+  out.points.reserve(voxels.size());
+  for (const Voxel& v : voxels) out.points.push_back(v.centroid());
+  return out;
+}
+
+// The surface at voxel v's centroid from the points of its 3x3x3 block of voxels: 26 table
+// look-ups and a 3x3 eigen-solve, against a k-nearest query over the centroids and a
+// covariance of its k neighbours (half the time on a Kinect frame, docs/performance.md).
+PointSurface block_surface(const VoxelSlots& slots, const std::vector<Moments>& voxels,
+                           std::size_t v, const NeighborhoodSettings& stored) {
+  const VoxelKey& centre = voxels[v].key;
+  double count = 0.0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::array<double, 6> outer{};
+  for (std::int64_t dx = -1; dx <= 1; ++dx) {
+    for (std::int64_t dy = -1; dy <= 1; ++dy) {
+      for (std::int64_t dz = -1; dz <= 1; ++dz) {
+        const std::size_t s = slots.find({centre.x + dx, centre.y + dy, centre.z + dz});
+        if (s == VoxelSlots::kNone) continue;
+        count += voxels[s].count;
+        sum += voxels[s].sum;
+        for (std::size_t k = 0; k < 6; ++k) outer[k] += voxels[s].outer[k];
+      }
+    }
+  }
+  const Eigen::Vector3d mean = sum / count;
+  Eigen::Matrix3d covariance;
+  covariance << outer[0], outer[1], outer[2], outer[1], outer[3], outer[4], outer[2], outer[4],
+      outer[5];
+  covariance = covariance / count - mean * mean.transpose();
+  return describe_covariance(voxels[v].centroid(), mean, covariance,
+                             static_cast<std::size_t>(count), stored);
+}
+
+// voxel_downsample_with_surfaces of an accumulated table; `stored` from in_stored_frame.
+PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Vector3d& origin_m,
+                               const NeighborhoodSettings& stored, std::size_t threads) {
+  const auto& voxels = table.voxels;
+  const std::size_t n = voxels.size();
+  PointCloud out;
+  out.origin_m = origin_m;
+  out.points.resize(n);
+  out.normals.resize(n);
+  out.covariances.resize(n);
+  parallel_chunks(n, resolve_threads(threads, n), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      out.points[v] = voxels[v].centroid();
+      const PointSurface s = block_surface(table.slots, voxels, v, stored);
+      out.normals[v] = s.normal;
+      out.covariances[v] = s.covariance;
+    }
+  });
+  return out;
+}
+
 // ---- random subsets ----
 
 // Uniform integer in [0, bound): reject the top partial block so that the modulo is unbiased
@@ -388,6 +534,20 @@ PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
   return describe(points[i], points, neighbors, stored);
 }
 
+PointCloud registration_grid(const PointCloud& cloud, double voxel_size_m,
+                             const NeighborhoodSettings& settings, bool surfaces) {
+  if (!surfaces) return voxel_downsample(cloud, voxel_size_m);
+  check_neighborhood(settings);
+  const auto table = accumulate_voxels<Moments>(cloud, voxel_size_m);
+  // A 3x3 patch of voxels across a surface holds about 9 * (points per voxel): at least k of
+  // them, or the centroids' own k nearest neighbours give the better estimate.
+  if (9 * cloud.size() < settings.k * table.voxels.size()) {
+    return centroids_of(table.voxels, cloud.origin_m);
+  }
+  return with_block_surfaces(table, cloud.origin_m, in_stored_frame(settings, cloud),
+                             settings.num_threads);
+}
+
 }  // namespace detail
 
 void NeighborhoodSettings::validate() const {
@@ -423,27 +583,14 @@ void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
 }
 
 PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m) {
-  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
-  VoxelSlots slots(cloud.size() / 8);
-  std::vector<Eigen::Vector3d> sums;
-  std::vector<std::size_t> counts;
-  for (const Eigen::Vector3f& p : cloud.points) {
-    const std::size_t slot = slots.slot(grid.key(p));
-    if (slot == sums.size()) {
-      sums.emplace_back(Eigen::Vector3d::Zero());
-      counts.push_back(0);
-    }
-    sums[slot] += p.cast<double>();
-    ++counts[slot];
-  }
-  PointCloud out;
-  out.origin_m = cloud.origin_m;
-  out.points.reserve(sums.size());
-  // Rounding is monotone, so the float centroid stays within its points' range: in their voxel.
-  for (std::size_t v = 0; v < sums.size(); ++v) {
-    out.points.emplace_back((sums[v] / static_cast<double>(counts[v])).cast<float>());
-  }
-  return out;
+  return centroids_of(accumulate_voxels<Centroid>(cloud, voxel_size_m).voxels, cloud.origin_m);
+}
+
+PointCloud voxel_downsample_with_surfaces(const PointCloud& cloud, double voxel_size_m,
+                                          const NeighborhoodSettings& settings) {
+  check_neighborhood(settings);
+  return with_block_surfaces(accumulate_voxels<Moments>(cloud, voxel_size_m), cloud.origin_m,
+                             detail::in_stored_frame(settings, cloud), settings.num_threads);
 }
 
 double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "checks.hpp"
+#include "point_surfaces.hpp"
 #include "sgdicp/cost.hpp"
 #include "sgdicp/evaluation.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
@@ -187,6 +188,20 @@ inline void conclude(RegistrationResult& result, const PointCloud& source,
   result.time_ms = clock.elapsed_ms();
 }
 
+/// The index over a registration's reference: the cloud as given (voxel_m = 0) or on the grid
+/// of registration_grid, with the surfaces of its voxel blocks when the cost reads them.
+template <typename Settings>
+[[nodiscard]] ReferenceIndex grid_index(PointCloud reference, double voxel_m,
+                                        const Settings& settings) {
+  const KdTreeSettings tree{.num_threads = settings.num_threads};
+  if (voxel_m == 0.0) return ReferenceIndex(std::move(reference), tree);
+  NeighborhoodSettings neighborhood = settings.neighborhood;
+  neighborhood.num_threads = settings.num_threads;
+  const bool surfaces = needs_reference_normals(settings.cost) || needs_covariances(settings.cost);
+  return ReferenceIndex::on_voxel_grid(
+      registration_grid(reference, voxel_m, neighborhood, surfaces), voxel_m, tree);
+}
+
 /// The index of a reference given as a cloud (reference_index_for, the convenience overloads of
 /// align() and align_batch()): on the settings' voxel grid, with what the cost needs unless the
 /// solver estimates it on first use.
@@ -196,8 +211,7 @@ template <typename Settings>
   settings.validate();
   const double voxel_m =
       registration_voxel_size(reference, settings.voxel_size_m, settings.downsample_to);
-  ReferenceIndex index(std::move(reference), KdTreeSettings{.num_threads = settings.num_threads,
-                                                            .voxel_size_m = voxel_m});
+  ReferenceIndex index = grid_index(std::move(reference), voxel_m, settings);
   if (when == SurfaceEstimation::eager) {
     prepare_reference(index, settings.cost, settings.neighborhood);
   } else if (settings.num_threads != 1) {

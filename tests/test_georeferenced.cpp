@@ -200,10 +200,11 @@ TEST(Georeferencing, KittiPairAtUtmCoordinates) {
     const RegistrationResult r = align(source, reference);
     EXPECT_TRUE(r.converged) << r.message;
     EXPECT_FALSE(r.degenerate) << r.constraint_ratio;
-    // Within 25 %: the default voxel grid falls on other points at another offset (its phase
-    // is set by the stored coordinates), which moves the ratio by ~12 %; a quantised cloud was
-    // 97 % off (0.005 against 0.17).
-    EXPECT_NEAR(r.constraint_ratio, clean.constraint_ratio, 0.25 * clean.constraint_ratio);
+    // Within 40 %: the default voxel grid falls on other points at another offset (its phase
+    // is set by the stored coordinates), and so do the voxel blocks the reference normals come
+    // from, which moves the ratio by up to 25 %; a quantised cloud was 97 % off (0.005 against
+    // 0.17).
+    EXPECT_NEAR(r.constraint_ratio, clean.constraint_ratio, 0.4 * clean.constraint_ratio);
     // Errors at the sensor (the offset point), as for the clean pair at its origin.
     const Eigen::Matrix4d T_at_sensor = between_stored(r.T_reference_source, kOffset_m, kOffset_m);
     EXPECT_LT(translation_error(T_at_sensor, T_gt), 0.05);

@@ -1,6 +1,7 @@
 // Tests of the registrations' voxel grid (SgdSettings::voxel_size_m / downsample_to,
 // voxel_size_for_count, reference_index_for) and of the coarse stage's own cost
 // (SgdSettings::coarse_cost).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -127,6 +128,127 @@ TEST(ReferenceIndexVoxelGrid, ThinsBeforeIndexingAndSaysSo) {
     EXPECT_THROW(ReferenceIndex(scene, KdTreeSettings{.voxel_size_m = bad}), InvalidSettingsError)
         << bad;
   }
+}
+
+TEST(ReferenceIndexVoxelGrid, OnAVoxelGridIndexesTheThinnedCloudAsGiven) {
+  const PointCloud thinned = voxel_downsample_with_surfaces(synthetic_scene(5, 20000), 0.2);
+  const ReferenceIndex index = ReferenceIndex::on_voxel_grid(thinned, 0.2);
+  EXPECT_EQ(index.voxel_size_m(), 0.2);
+  EXPECT_EQ(index.cloud().points, thinned.points);
+  EXPECT_EQ(index.cloud().normals, thinned.normals);
+  for (const double bad : {0.0, -0.1, std::nan(""), HUGE_VAL}) {
+    EXPECT_THROW((void)ReferenceIndex::on_voxel_grid(thinned, bad), InvalidSettingsError) << bad;
+  }
+  EXPECT_THROW(
+      (void)ReferenceIndex::on_voxel_grid(thinned, 0.2, KdTreeSettings{.voxel_size_m = 0.2}),
+      InvalidSettingsError);
+}
+
+// ---- surfaces from the voxel blocks (voxel_downsample_with_surfaces) ----
+
+// A 1 m square of 40k points with 1 mm noise, tilted, seen from one side.
+PointCloud noisy_square(const Eigen::Vector3d& normal) {
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::normal_distribution<double> noise(0.0, 0.001);
+  const Eigen::Vector3d a = normal.unitOrthogonal();
+  const Eigen::Vector3d b = normal.cross(a);
+  PointCloud cloud;
+  for (int i = 0; i < 40000; ++i) {
+    const Eigen::Vector3d p =
+        Eigen::Vector3d(2.0, 1.0, -1.0) + u(rng) * a + u(rng) * b + noise(rng) * normal;
+    cloud.points.push_back(p.cast<float>());
+  }
+  return cloud;
+}
+
+TEST(VoxelSurfaces, CentroidsOfVoxelDownsampleWithThePlanesNormal) {
+  const Eigen::Vector3d normal = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+  const PointCloud cloud = noisy_square(normal);
+  NeighborhoodSettings settings;
+  settings.viewpoint = (Eigen::Vector3d(2.0, 1.0, -1.0) - 5.0 * normal).cast<float>();
+  settings.num_threads = 1;
+  const PointCloud grid = voxel_downsample_with_surfaces(cloud, 0.05, settings);
+  EXPECT_EQ(grid.points, voxel_downsample(cloud, 0.05).points);
+  ASSERT_TRUE(grid.has_normals());
+  ASSERT_TRUE(grid.has_covariances());
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    const Eigen::Vector3d n = grid.normals[i].cast<double>();
+    EXPECT_LT(n.dot(normal), -std::cos(1.0 * kDeg)) << i;  // faces the viewpoint, within 1 deg
+    const Eigen::Matrix3d plane =
+        Eigen::Matrix3d::Identity() - (1.0 - settings.epsilon) * n * n.transpose();
+    EXPECT_TRUE(grid.covariances[i].cast<double>().isApprox(plane, 1e-5)) << i;
+  }
+  settings.num_threads = 2;
+  const PointCloud threaded = voxel_downsample_with_surfaces(cloud, 0.05, settings);
+  EXPECT_EQ(threaded.normals, grid.normals);
+  EXPECT_EQ(threaded.covariances, grid.covariances);
+  settings.regularize = false;  // raw covariances: the noise, 1 mm, along the normal
+  const PointCloud raw = voxel_downsample_with_surfaces(cloud, 0.05, settings);
+  const double along = normal.dot(raw.covariances[raw.size() / 2].cast<double>() * normal);
+  EXPECT_NEAR(std::sqrt(along), 0.001, 0.0003);
+}
+
+TEST(VoxelSurfaces, LinesAndLonePointsHaveNoSurface) {
+  PointCloud cloud;
+  for (int i = 0; i < 1000; ++i) cloud.points.emplace_back(0.001F * static_cast<float>(i), 0, 0);
+  cloud.points.emplace_back(5.0F, 5.0F, 5.0F);  // alone in its block
+  const PointCloud grid = voxel_downsample_with_surfaces(cloud, 0.05);
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    EXPECT_TRUE(grid.normals[i].isZero()) << i;
+    EXPECT_EQ(grid.covariances[i], Eigen::Matrix3f::Identity()) << i;
+  }
+  PointCloud bad = cloud;
+  bad.points[3].y() = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW((void)voxel_downsample_with_surfaces(bad, 0.05), InvalidInputError);
+  EXPECT_THROW((void)voxel_downsample_with_surfaces(cloud, 0.0), InvalidSettingsError);
+  NeighborhoodSettings settings;
+  settings.epsilon = 0.0;
+  EXPECT_THROW((void)voxel_downsample_with_surfaces(cloud, 0.05, settings), InvalidSettingsError);
+}
+
+// On a real dense frame the blocks give the normals the centroids' own k nearest neighbours
+// give (measured: 3.1 deg apart on average at the 1.1 cm grid of 20k points).
+TEST(VoxelSurfaces, AgreeWithNearestNeighbourNormalsOnAKinectFrame) {
+  const auto file = test::shared_data("pcl_kinect_frames/frame_20121214T142255.814212.pcd");
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "missing " << file;
+  const PointCloud cloud = read_point_cloud(file).cloud;
+  const double voxel_m = voxel_size_for_count(cloud, 20000);
+  const PointCloud blocks = voxel_downsample_with_surfaces(cloud, voxel_m);
+  PointCloud nearest = voxel_downsample(cloud, voxel_m);
+  estimate_normals(nearest);
+  std::vector<double> angles;
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    if (blocks.normals[i].isZero() || nearest.normals[i].isZero()) continue;
+    const double c =
+        std::abs(blocks.normals[i].cast<double>().dot(nearest.normals[i].cast<double>()));
+    angles.push_back(std::acos(std::min(1.0, c)));
+  }
+  ASSERT_GT(angles.size(), blocks.size() * 9 / 10);
+  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+  EXPECT_LT(angles[angles.size() / 2], 2.0 * kDeg);
+}
+
+// A registration's reference grid carries the blocks' surfaces when its cost reads them and
+// the grid holds at least k/9 points per voxel; on a sparser grid, or for point-to-point, the
+// centroids alone.
+TEST(RegistrationVoxelGrid, DenseGridsCarryTheirBlocksSurfaces) {
+  const PointCloud scene = synthetic_scene(6);  // 60k points
+  SgdSettings dense;
+  dense.downsample_to = 8000;  // ~7.5 points per voxel
+  const ReferenceIndex index = reference_index_for(scene, dense);
+  NeighborhoodSettings neighborhood = dense.neighborhood;
+  neighborhood.num_threads = 1;
+  const PointCloud blocks =
+      voxel_downsample_with_surfaces(scene, index.voxel_size_m(), neighborhood);
+  EXPECT_EQ(index.cloud().points, blocks.points);
+  EXPECT_EQ(index.cloud().normals, blocks.normals);
+  SgdSettings sparse = dense;
+  sparse.downsample_to = 40000;  // ~1.5 points per voxel
+  EXPECT_FALSE(reference_index_for(scene, sparse).cloud().has_normals());
+  SgdSettings point = dense;
+  point.cost = CostType::point_to_point;
+  EXPECT_FALSE(reference_index_for(scene, point).cloud().has_normals());
 }
 
 // The default path: the reference on a grid chosen from it, the source on the same grid; the

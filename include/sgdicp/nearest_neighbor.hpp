@@ -47,6 +47,13 @@ class ReferenceIndex {
   /// Builds the tree, over the reference thinned by settings.voxel_size_m when it is set. Throws
   /// InvalidInputError for an empty cloud or a non-finite point.
   explicit ReferenceIndex(PointCloud reference, const KdTreeSettings& settings = {});
+  /// An index over a cloud already thinned with a voxel grid of side voxel_size_m (e.g. by
+  /// voxel_downsample_with_surfaces, keeping its normals and covariances), indexed as given;
+  /// voxel_size_m() reports that grid, so that align() thins its source on it too.
+  /// settings.voxel_size_m must be 0. Throws as the constructor, and InvalidSettingsError for a
+  /// voxel size that is not positive and finite.
+  [[nodiscard]] static ReferenceIndex on_voxel_grid(PointCloud thinned, double voxel_size_m,
+                                                    const KdTreeSettings& settings = {});
   ~ReferenceIndex();
   ReferenceIndex(ReferenceIndex&&) noexcept;
   ReferenceIndex& operator=(ReferenceIndex&&) noexcept;

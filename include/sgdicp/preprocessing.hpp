@@ -87,6 +87,18 @@ void check_reference_prepared(const ReferenceIndex& reference, CostType cost);
 /// InvalidInputError for a non-finite point.
 [[nodiscard]] PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m);
 
+/// voxel_downsample (same points, same order), with each centroid's normal and covariance
+/// estimated as estimate_covariances does (settings: regularize, epsilon, viewpoint,
+/// num_threads; the same degenerate cases) but over the input points of its 3x3x3 block of
+/// voxels instead of its k nearest neighbours (settings.k is only validated). On a grid that
+/// holds several points per voxel this summarises every input point at the cost of 26 table
+/// look-ups per centroid, about half of a k-nearest estimate over the centroids
+/// (docs/preprocessing.md); the registrations use it for their reference grid when the grid
+/// holds at least k/9 points per voxel. Throws as voxel_downsample and estimate_covariances.
+[[nodiscard]] PointCloud voxel_downsample_with_surfaces(const PointCloud& cloud,
+                                                        double voxel_size_m,
+                                                        const NeighborhoodSettings& settings = {});
+
 /// The voxel size, metres, at which voxel_downsample keeps about `target_points` of the cloud
 /// (within ~15 %; a few counting passes over the cloud, each cheaper than one voxel_downsample),
 /// or 0 when there is nothing to thin: target_points is 0, the cloud has at most that many
