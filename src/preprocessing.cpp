@@ -7,6 +7,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -365,15 +366,30 @@ class VoxelGrid {
   double size_;
 };
 
-// Occupied voxels of the grid, counting stopped once above `limit`.
-std::size_t occupied_voxels(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
-                            std::size_t limit) {
-  VoxelSlots slots(expected);  // grows as needed: a table sized for `limit` costs more to clear
+// One counting pass of the voxel size search: the occupied voxels of a grid and each point's
+// voxel, so that the pass which settles the size also serves the thinning (accumulate_voxels)
+// instead of hashing every point again (6 % of a default registration on a Kinect frame).
+struct CountedGrid {
+  VoxelGrid grid;
+  VoxelSlots slots;
+  std::vector<std::uint32_t> point_slots;  // empty when the count passed its limit
+};
+
+// Counting stops once above `limit` (a grid far too fine); `expected` sizes the table; the
+// points' slots are kept when `record`.
+CountedGrid count_voxels(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
+                         std::size_t limit, bool record) {
+  CountedGrid counted{grid, VoxelSlots(expected), {}};
+  if (record) counted.point_slots.reserve(cloud.size());
   for (const Eigen::Vector3f& p : cloud.points) {
-    slots.slot(grid.key(p));
-    if (slots.size() > limit) break;
+    const std::size_t slot = counted.slots.slot(grid.key(p));
+    if (record) counted.point_slots.push_back(static_cast<std::uint32_t>(slot));
+    if (counted.slots.size() > limit) {
+      counted.point_slots.clear();
+      break;
+    }
   }
-  return slots.size();
+  return counted;
 }
 
 // What voxel_downsample keeps of a voxel: the sum of its points, for their centroid.
@@ -433,6 +449,19 @@ VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m
   return table;
 }
 
+// accumulate_voxels over the grid of a complete counting pass, reusing its hashing.
+template <class Voxel>
+VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, CountedGrid counted) {
+  VoxelTable<Voxel> table{std::move(counted.slots), {}};
+  table.voxels.reserve(table.slots.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const std::uint32_t slot = counted.point_slots[i];
+    if (slot == table.voxels.size()) table.voxels.emplace_back(counted.grid.key(cloud.points[i]));
+    table.voxels[slot].add(cloud.points[i]);
+  }
+  return table;
+}
+
 // The centroids of a table's voxels, as a cloud measured from origin_m.
 template <class Voxel>
 PointCloud centroids_of(const std::vector<Voxel>& voxels, const Eigen::Vector3d& origin_m) {
@@ -470,6 +499,50 @@ PointSurface block_surface(const VoxelSlots& slots, const std::vector<Moments>& 
   covariance = covariance / count - mean * mean.transpose();
   return describe_covariance(voxels[v].centroid(), mean, covariance,
                              static_cast<std::size_t>(count), stored);
+}
+
+// voxel_size_for_count; `settled` (if not null) receives the counting pass of the returned
+// size when one counted it (the search ended within its tolerance), else nullopt.
+double search_voxel_size(const PointCloud& cloud, std::size_t target_points,
+                         std::optional<CountedGrid>* settled) {
+  if (settled != nullptr) settled->reset();
+  if (target_points == 0 || cloud.size() <= target_points) return 0.0;
+  const float largest = largest_coordinate(cloud);
+  // Occupied voxels fall as a power of the size, N(v) ~ v^-a: a ~ 2 on surfaces (every sensor's
+  // clouds), ~3 in volumes, ~1 on lines. Start from a surface filling the bulk box's diagonal
+  // square, then take secant steps in log-log space with the slope measured by the last two.
+  const BoundingBox& box = bulk_bounding_box(cloud).box;
+  const double diagonal = (box.max - box.min).cast<double>().norm();
+  if (!(diagonal > 0.0)) return 0.0;  // all points in one place: nothing to thin
+  // A grid fine enough for the bulk cannot index a point 1e20 times farther out (a spurious
+  // return robust scaling leaves out): such a cloud is used as it is.
+  const double finest = static_cast<double>(largest) / (kMaxVoxelIndex / 4.0);
+  if (diagonal / std::sqrt(static_cast<double>(target_points)) / 1e3 < finest) return 0.0;
+  const auto target = static_cast<double>(target_points);
+  const std::size_t limit = 8 * target_points;  // a count above says "far too small"
+  double size = diagonal / std::sqrt(target);
+  double previous_size = 0.0;
+  double previous_count = 0.0;
+  double slope = 2.0;
+  // Each point's slot is kept as 32 bits: a larger cloud is counted, not reused.
+  const bool keep = settled != nullptr && cloud.size() <= std::numeric_limits<std::uint32_t>::max();
+  for (int pass = 0; pass < kVoxelSearchPasses; ++pass) {
+    CountedGrid counted = count_voxels(cloud, VoxelGrid(size, largest), target_points, limit, keep);
+    const auto count = static_cast<double>(counted.slots.size());
+    if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) {
+      if (keep && !counted.point_slots.empty()) *settled = std::move(counted);
+      break;
+    }
+    if (previous_size > 0.0 && count <= static_cast<double>(limit) &&
+        previous_count <= static_cast<double>(limit) && count != previous_count) {
+      slope =
+          std::clamp(std::log(previous_count / count) / std::log(size / previous_size), 0.5, 3.0);
+    }
+    previous_size = size;
+    previous_count = count;
+    size *= std::pow(count / target, 1.0 / slope);
+  }
+  return size;
 }
 
 // voxel_downsample_with_surfaces of an accumulated table; `stored` from in_stored_frame.
@@ -534,18 +607,31 @@ PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
   return describe(points[i], points, neighbors, stored);
 }
 
-PointCloud registration_grid(const PointCloud& cloud, double voxel_size_m,
-                             const NeighborhoodSettings& settings, bool surfaces) {
-  if (!surfaces) return voxel_downsample(cloud, voxel_size_m);
+RegistrationGrid registration_grid(const PointCloud& cloud, double voxel_size_m,
+                                   std::size_t downsample_to, const NeighborhoodSettings& settings,
+                                   bool surfaces) {
+  std::optional<CountedGrid> settled;
+  if (voxel_size_m <= 0.0) {
+    if (cloud.has_normals() || cloud.has_covariances()) return {};
+    voxel_size_m = downsample_to == 0 ? 0.0 : search_voxel_size(cloud, downsample_to, &settled);
+    if (voxel_size_m == 0.0) return {};
+  }
+  if (!surfaces) {
+    const auto table = settled ? accumulate_counted<Centroid>(cloud, std::move(*settled))
+                               : accumulate_voxels<Centroid>(cloud, voxel_size_m);
+    return {centroids_of(table.voxels, cloud.origin_m), voxel_size_m};
+  }
   check_neighborhood(settings);
-  const auto table = accumulate_voxels<Moments>(cloud, voxel_size_m);
+  const auto table = settled ? accumulate_counted<Moments>(cloud, std::move(*settled))
+                             : accumulate_voxels<Moments>(cloud, voxel_size_m);
   // A 3x3 patch of voxels across a surface holds about 9 * (points per voxel): at least k of
   // them, or the centroids' own k nearest neighbours give the better estimate.
   if (9 * cloud.size() < settings.k * table.voxels.size()) {
-    return centroids_of(table.voxels, cloud.origin_m);
+    return {centroids_of(table.voxels, cloud.origin_m), voxel_size_m};
   }
-  return with_block_surfaces(table, cloud.origin_m, in_stored_frame(settings, cloud),
-                             settings.num_threads);
+  return {with_block_surfaces(table, cloud.origin_m, in_stored_frame(settings, cloud),
+                              settings.num_threads),
+          voxel_size_m};
 }
 
 }  // namespace detail
@@ -594,38 +680,7 @@ PointCloud voxel_downsample_with_surfaces(const PointCloud& cloud, double voxel_
 }
 
 double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {
-  if (target_points == 0 || cloud.size() <= target_points) return 0.0;
-  const float largest = largest_coordinate(cloud);
-  // Occupied voxels fall as a power of the size, N(v) ~ v^-a: a ~ 2 on surfaces (every sensor's
-  // clouds), ~3 in volumes, ~1 on lines. Start from a surface filling the bulk box's diagonal
-  // square, then take secant steps in log-log space with the slope measured by the last two.
-  const BoundingBox& box = bulk_bounding_box(cloud).box;
-  const double diagonal = (box.max - box.min).cast<double>().norm();
-  if (!(diagonal > 0.0)) return 0.0;  // all points in one place: nothing to thin
-  // A grid fine enough for the bulk cannot index a point 1e20 times farther out (a spurious
-  // return robust scaling leaves out): such a cloud is used as it is.
-  const double finest = static_cast<double>(largest) / (kMaxVoxelIndex / 4.0);
-  if (diagonal / std::sqrt(static_cast<double>(target_points)) / 1e3 < finest) return 0.0;
-  const auto target = static_cast<double>(target_points);
-  const std::size_t limit = 8 * target_points;  // a count above says "far too small"
-  double size = diagonal / std::sqrt(target);
-  double previous_size = 0.0;
-  double previous_count = 0.0;
-  double slope = 2.0;
-  for (int pass = 0; pass < kVoxelSearchPasses; ++pass) {
-    const auto count =
-        static_cast<double>(occupied_voxels(cloud, VoxelGrid(size, largest), target_points, limit));
-    if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) break;
-    if (previous_size > 0.0 && count <= static_cast<double>(limit) &&
-        previous_count <= static_cast<double>(limit) && count != previous_count) {
-      slope =
-          std::clamp(std::log(previous_count / count) / std::log(size / previous_size), 0.5, 3.0);
-    }
-    previous_size = size;
-    previous_count = count;
-    size *= std::pow(count / target, 1.0 / slope);
-  }
-  return size;
+  return search_voxel_size(cloud, target_points, nullptr);
 }
 
 double registration_voxel_size(const PointCloud& cloud, double voxel_size_m,

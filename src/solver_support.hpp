@@ -188,18 +188,18 @@ inline void conclude(RegistrationResult& result, const PointCloud& source,
   result.time_ms = clock.elapsed_ms();
 }
 
-/// The index over a registration's reference: the cloud as given (voxel_m = 0) or on the grid
-/// of registration_grid, with the surfaces of its voxel blocks when the cost reads them.
+/// The index over a registration's reference (registration_grid): as given, or on its grid
+/// with the surfaces of its voxel blocks when the cost reads them.
 template <typename Settings>
-[[nodiscard]] ReferenceIndex grid_index(PointCloud reference, double voxel_m,
-                                        const Settings& settings) {
+[[nodiscard]] ReferenceIndex grid_index(PointCloud reference, const Settings& settings) {
   const KdTreeSettings tree{.num_threads = settings.num_threads};
-  if (voxel_m == 0.0) return ReferenceIndex(std::move(reference), tree);
   NeighborhoodSettings neighborhood = settings.neighborhood;
   neighborhood.num_threads = settings.num_threads;
   const bool surfaces = needs_reference_normals(settings.cost) || needs_covariances(settings.cost);
-  return ReferenceIndex::on_voxel_grid(
-      registration_grid(reference, voxel_m, neighborhood, surfaces), voxel_m, tree);
+  RegistrationGrid grid = registration_grid(reference, settings.voxel_size_m,
+                                            settings.downsample_to, neighborhood, surfaces);
+  if (!grid.thinned) return ReferenceIndex(std::move(reference), tree);
+  return ReferenceIndex::on_voxel_grid(std::move(*grid.thinned), grid.voxel_size_m, tree);
 }
 
 /// The index of a reference given as a cloud (reference_index_for, the convenience overloads of
@@ -209,9 +209,7 @@ template <typename Settings>
 [[nodiscard]] ReferenceIndex index_for(PointCloud reference, const Settings& settings,
                                        SurfaceEstimation when) {
   settings.validate();
-  const double voxel_m =
-      registration_voxel_size(reference, settings.voxel_size_m, settings.downsample_to);
-  ReferenceIndex index = grid_index(std::move(reference), voxel_m, settings);
+  ReferenceIndex index = grid_index(std::move(reference), settings);
   if (when == SurfaceEstimation::eager) {
     prepare_reference(index, settings.cost, settings.neighborhood);
   } else if (settings.num_threads != 1) {

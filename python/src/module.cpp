@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -107,18 +108,14 @@ struct SharedIndex {
   double build_ms = 0.0;
 };
 
-/// Builds the KD-tree and gives the reference what `cost` needs (normals or covariances), with
-/// the GIL released.
-/// With downsample_to > 0 and no tree.voxel_size_m, the voxel grid is chosen from the points
-/// (registration_voxel_size), as reference_index_for does.
-std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, KdTreeSettings tree,
-                                         CostType cost, const NeighborhoodSettings& neighborhood,
-                                         std::size_t downsample_to = 0) {
+/// How a reference index is built from its cloud (with the GIL released by build_index).
+using IndexBuilder = std::function<ReferenceIndex(PointCloud)>;
+
+/// Builds the index with `build`, with the GIL released, and times it.
+std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted, const IndexBuilder& build) {
   const py::gil_scoped_release release;
   const auto start = std::chrono::steady_clock::now();
-  tree.voxel_size_m = registration_voxel_size(converted.cloud, tree.voxel_size_m, downsample_to);
-  ReferenceIndex index(std::move(converted.cloud), tree);
-  prepare_reference(index, cost, neighborhood);
+  ReferenceIndex index = build(std::move(converted.cloud));
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return std::make_shared<SharedIndex>(
@@ -256,21 +253,19 @@ BatchSettings batch_settings_or_default(const py::handle& settings, const Method
   return settings.cast<BatchSettings>();
 }
 
-/// What the reference index of a registration holds, read from its settings: the voxel grid
-/// and the threads of reference_index_for, and the normals or covariances of `cost`, which the
-/// batch methods need in the index (the SGD methods estimate theirs during the run: none).
+/// The reference index of a registration, as its settings say: reference_index_for (the
+/// library's one rule: voxel grid, threads, and the normals or covariances a batch cost needs in
+/// the index), and the cost a given index must be prepared for (batch methods; the SGD methods
+/// estimate what they lack during the run: none).
 struct ReferenceNeeds {
   std::optional<CostType> cost;
-  NeighborhoodSettings neighborhood;
-  KdTreeSettings tree;
-  std::size_t downsample_to = 0;
+  IndexBuilder build;
 };
 
 template <typename Settings>
 ReferenceNeeds needs_of(const Settings& s, bool cost_in_index) {
-  return {cost_in_index ? std::optional<CostType>(s.cost) : std::nullopt, s.neighborhood,
-          KdTreeSettings{.num_threads = s.num_threads, .voxel_size_m = s.voxel_size_m},
-          s.downsample_to};
+  return {cost_in_index ? std::optional<CostType>(s.cost) : std::nullopt,
+          [s](PointCloud cloud) { return reference_index_for(std::move(cloud), s); }};
 }
 
 /// Registration with either solver: the index (given, or built as `needs` says), then
@@ -284,9 +279,8 @@ Result register_with(const ConvertedCloud& src, const py::handle& reference,
     index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during the run
     if (needs.cost) check_prepared(*index, *needs.cost);
   } else {
-    auto built = build_index(cloud_from_array(reference, "reference", NonFinite::drop), needs.tree,
-                             needs.cost.value_or(CostType::point_to_point), needs.neighborhood,
-                             needs.downsample_to);
+    auto built =
+        build_index(cloud_from_array(reference, "reference", NonFinite::drop), needs.build);
     build_ms = built->build_ms;
     index = std::move(built);
   }
@@ -477,7 +471,11 @@ void bind_reference_index(py::module_& m) {
                  cloud_from_array(points, "reference", NonFinite::drop, false, normals);
              const KdTreeSettings tree{as_count(leaf_size, "leaf_size"),
                                        as_count(threads, "threads")};
-             return build_index(std::move(converted), tree, c, n);
+             return build_index(std::move(converted), [&](PointCloud cloud) {
+               ReferenceIndex index(std::move(cloud), tree);
+               prepare_reference(index, c, n);
+               return index;
+             });
            }),
            "points"_a, py::kw_only(), "normals"_a = py::none(),
            "leaf_size"_a = KdTreeSettings{}.leaf_size, "cost"_a = "point-to-point",
@@ -501,9 +499,7 @@ void bind_reference_index(py::module_& m) {
              const py::kwargs& overrides) {
             const ReferenceNeeds needs =
                 reference_needs(method_from_object(method), settings, overrides);
-            return build_index(cloud_from_array(points, "reference", NonFinite::drop), needs.tree,
-                               needs.cost.value_or(CostType::point_to_point), needs.neighborhood,
-                               needs.downsample_to);
+            return build_index(cloud_from_array(points, "reference", NonFinite::drop), needs.build);
           },
           "points"_a, py::kw_only(), "method"_a = "sgd", "settings"_a = py::none(),
           "The index that register(source, points, method=method, settings=settings, "
