@@ -1,5 +1,6 @@
-// Micro-benchmarks of the registrations' voxel grid (issue 13, fifth round): choosing the size
-// that keeps 20,000 points (voxel_size_for_count), thinning a cloud on it (voxel_downsample), and
+// Micro-benchmarks of the registrations' voxel grid (issue 13, fifth and sixth rounds): choosing
+// the size that keeps 20,000 points (voxel_size_for_count), thinning a cloud on it
+// (voxel_downsample), with its surfaces from the voxel blocks or from k nearest centroids, and
 // the whole reference preparation of the default (reference_index_for: size, thinning, KD-tree)
 // per dataset, with the points kept and the time per input point.
 //   build/.../sgdicp_micro_voxel_grid [--benchmark_repetitions=5 --benchmark_format=json ...]
@@ -54,6 +55,41 @@ void thinning(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
   state.counters["kept"] = static_cast<double>(kept);
 }
 
+// The grid's centroids with their surfaces, two ways (sixth round): from the voxel blocks
+// (voxel_downsample_with_surfaces) or from the k nearest centroids (estimate_normals over them).
+void thinning_with_block_surfaces(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
+  const PointCloud& cloud = sgdicp::bench::cloud(ds.reference);
+  const double size = sgdicp::voxel_size_for_count(cloud, kTarget);
+  if (size <= 0.0) {
+    state.SkipWithError("cloud smaller than the target: nothing to thin");
+    return;
+  }
+  sgdicp::NeighborhoodSettings one_thread;
+  one_thread.num_threads = 1;
+  for (auto _ : state) {
+    const PointCloud thinned = sgdicp::voxel_downsample_with_surfaces(cloud, size, one_thread);
+    benchmark::DoNotOptimize(thinned.normals.data());
+  }
+  per_input_point(state, cloud);
+}
+
+void thinning_with_nearest_normals(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
+  const PointCloud& cloud = sgdicp::bench::cloud(ds.reference);
+  const double size = sgdicp::voxel_size_for_count(cloud, kTarget);
+  if (size <= 0.0) {
+    state.SkipWithError("cloud smaller than the target: nothing to thin");
+    return;
+  }
+  sgdicp::NeighborhoodSettings one_thread;
+  one_thread.num_threads = 1;
+  for (auto _ : state) {
+    PointCloud thinned = sgdicp::voxel_downsample(cloud, size);
+    sgdicp::estimate_normals(thinned, one_thread);
+    benchmark::DoNotOptimize(thinned.normals.data());
+  }
+  per_input_point(state, cloud);
+}
+
 // What a registration with the defaults spends on its reference before the first mini-batch.
 void reference_preparation(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
   const PointCloud& cloud = sgdicp::bench::cloud(ds.reference);
@@ -80,6 +116,8 @@ int main(int argc, char** argv) {
     for (const auto& [name, function] :
          {std::pair{"voxel_size_for_count/", &size_search},
           std::pair{"voxel_downsample/", &thinning},
+          std::pair{"voxel_downsample_with_surfaces/", &thinning_with_block_surfaces},
+          std::pair{"voxel_downsample+estimate_normals/", &thinning_with_nearest_normals},
           std::pair{"reference_index_for/", &reference_preparation}}) {
       benchmark::RegisterBenchmark((name + ds.name).c_str(), function, ds)
           ->ComputeStatistics("min", min_of)
