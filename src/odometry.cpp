@@ -193,11 +193,33 @@ PointCloud crop_range(const PointCloud& cloud, double min_range_m, double max_ra
   return out;
 }
 
-Odometry::Odometry(const OdometrySettings& settings, std::string_view method, SgdSettings sgd,
-                   BatchSettings batch)
-    : settings_(settings), method_(&method_from_string(method)), sgd_(sgd), batch_(batch) {
+namespace {
+// Settings given with a method are used as they are (the CLI and Python apply the method's cost
+// before their options, so that a --coarse-cost survives); settings that contradict the
+// method's cost are a caller's mistake, not something to overwrite without a word.
+void check_method_cost(const Method& method, const SgdSettings& sgd, const BatchSettings& batch) {
+  if (!method.cost) return;
+  const CostType given = method.solver == Solver::sgd ? sgd.cost : batch.cost;
+  if (given == *method.cost) return;
+  throw InvalidSettingsError("method '" + std::string(method.name) + "' registers with the " +
+                             std::string(to_string(*method.cost)) + " cost but its settings have " +
+                             std::string(to_string(given)) +
+                             ": call apply_method_cost(method, sgd, batch) on them first");
+}
+}  // namespace
+
+Odometry::Odometry(const OdometrySettings& settings, std::string_view method,
+                   std::optional<SgdSettings> sgd, std::optional<BatchSettings> batch)
+    : settings_(settings),
+      method_(&method_from_string(method)),
+      sgd_(sgd.value_or(SgdSettings{})),
+      batch_(batch.value_or(BatchSettings{})) {
   settings_.validate();
-  apply_method_cost(*method_, sgd_, batch_);
+  if (!sgd && !batch) {
+    apply_method_cost(*method_, sgd_, batch_);
+  } else {
+    check_method_cost(*method_, sgd_, batch_);
+  }
   // The pipeline thins frames and map on its own voxel grid (settings_.voxel_size_m): the
   // registration step uses them as they are.
   sgd_.voxel_size_m = batch_.voxel_size_m = 0.0;

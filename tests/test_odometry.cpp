@@ -125,6 +125,9 @@ TEST(OdometrySettings, ValidateNamesTheOption) {
   s.max_points_per_voxel = 0;
   EXPECT_THROW(Odometry{s}, InvalidSettingsError);
   EXPECT_THROW(Odometry({}, "no-such-method"), InvalidSettingsError);
+  // Settings given with a method are used as they are, so they must carry its cost.
+  EXPECT_THROW(Odometry({}, "sgd-plane", SgdSettings::paper()), InvalidSettingsError);
+  EXPECT_THROW(Odometry({}, "icp-plane", std::nullopt, BatchSettings{}), InvalidSettingsError);
   EXPECT_NE(find_odometry_setting("max_points_per_voxel"), nullptr);
 }
 
@@ -167,6 +170,23 @@ TEST(Odometry, AMotionBeyondThePhysicalBoundIsAFailureNotAPose) {
 
 // The whole pipeline on a sequence with exact ground truth: 30 frames, 0.4 m and 1 deg per
 // frame (12 m, a 30 deg bend). Each frame is a fresh sample of the world (no point is seen
+// Without settings the method's cost is used in every stage; given settings are kept as they
+// are, so that a coarse cost chosen after the method's (--coarse-cost, coarse_cost=) survives.
+TEST(Odometry, MethodCostAndAChosenCoarseCost) {
+  const Odometry plane({}, "sgd-plane");
+  EXPECT_EQ(plane.sgd_settings().cost, CostType::point_to_plane);
+  EXPECT_EQ(plane.sgd_settings().coarse_cost, CostType::point_to_plane);
+  EXPECT_EQ(Odometry({}, "icp-plane").batch_settings().cost, CostType::point_to_plane);
+  SgdSettings chosen;
+  BatchSettings batch;
+  apply_method_cost(method_from_string("sgd-plane"), chosen, batch);
+  chosen.coarse_cost = CostType::point_to_point;
+  const Odometry kept({}, "sgd-plane", chosen);
+  EXPECT_EQ(kept.sgd_settings().cost, CostType::point_to_plane);
+  EXPECT_EQ(kept.sgd_settings().coarse_cost, CostType::point_to_point);
+  EXPECT_EQ(kept.sgd_settings().downsample_to, 0U);  // the pipeline keeps its own grid
+}
+
 // twice), 5 mm noise.
 TEST(Odometry, SyntheticSequenceEndDriftIsSmall) {
   const auto seq = test::synthetic_sequence(30, 0.4, 1.0, 4, 6000);

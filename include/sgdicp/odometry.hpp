@@ -124,10 +124,17 @@ struct FrameReport {
 
 class Odometry {
  public:
-  /// The registration step is `method` (methods.hpp) with `sgd` or `batch` as its settings (the
-  /// method sets their cost). Throws InvalidSettingsError for invalid settings or method.
+  /// The registration step is `method` (methods.hpp) with `sgd` or `batch` as its settings.
+  /// Without either, the defaults with the method's cost (apply_method_cost); given settings are
+  /// used as they are (their grid aside: the pipeline has its own), so apply the method's cost to
+  /// them before changing what you want (e.g. a coarse cost). Throws InvalidSettingsError for
+  /// invalid settings or method, or settings whose cost is not the method's.
   explicit Odometry(const OdometrySettings& settings = {}, std::string_view method = "sgd",
-                    SgdSettings sgd = {}, BatchSettings batch = {});
+                    std::optional<SgdSettings> sgd = std::nullopt,
+                    std::optional<BatchSettings> batch = std::nullopt);
+  /// The settings of the registration step, as used.
+  [[nodiscard]] const SgdSettings& sgd_settings() const noexcept { return sgd_; }
+  [[nodiscard]] const BatchSettings& batch_settings() const noexcept { return batch_; }
 
   /// Registers the next frame (points in its sensor frame) and returns its pose T_first_frame.
   /// The first frame is the identity. A failed frame is reported (last_report().failed) and
