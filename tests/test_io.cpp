@@ -214,6 +214,21 @@ TEST(IoFormat, FromExtension) {
   EXPECT_EQ(to_string(FileFormat::f32), "f32");
 }
 
+// One name table for formats and encodings (io.hpp), read by to_string, the Python bindings and
+// their messages.
+TEST(IoFormat, NameTables) {
+  EXPECT_EQ(to_string(FileFormat::automatic), "auto");
+  EXPECT_EQ(parse_enum<FileFormat>("automatic"), FileFormat::automatic);
+  EXPECT_EQ(parse_enum<FileFormat>("kitti-bin"), FileFormat::kitti_bin);
+  EXPECT_EQ(name_list<FileFormat>(), "auto, pcd, ply, kitti_bin, xyz, vtk or f32");
+  for (const std::string_view name : canonical_names<FileFormat>()) {
+    EXPECT_EQ(to_string(parse_enum<FileFormat>(name)), name);
+  }
+  EXPECT_THROW((void)parse_enum<FileFormat>("las"), InvalidSettingsError);
+  EXPECT_EQ(parse_enum<Encoding>("ascii"), Encoding::ascii);
+  EXPECT_EQ(name_list<Encoding>(), "binary or ascii");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Round trips
 

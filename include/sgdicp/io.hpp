@@ -13,6 +13,7 @@
 // Resources are bounded by the input: every count or size a header claims is checked against the
 // bytes that are really there before anything is allocated, and no input larger than
 // kMaxFileBytes or cloud larger than kMaxCloudPoints is read (docs/io.md).
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include <string>
 #include <string_view>
 
+#include "sgdicp/enum_names.hpp"
 #include "sgdicp/point_cloud.hpp"
 
 namespace sgdicp {
@@ -43,8 +45,27 @@ enum class FileFormat {
   f32,        ///< headerless float32 little-endian x y z, 12 bytes per point
 };
 
-/// Short lowercase name of a format ("pcd", "ply", ...).
-[[nodiscard]] std::string to_string(FileFormat format);
+inline constexpr std::array<EnumName<FileFormat>, 8> kFileFormatNames{{
+    {FileFormat::automatic, "auto"},
+    {FileFormat::pcd, "pcd"},
+    {FileFormat::ply, "ply"},
+    {FileFormat::kitti_bin, "kitti_bin"},
+    {FileFormat::xyz, "xyz"},
+    {FileFormat::vtk, "vtk"},
+    {FileFormat::f32, "f32"},
+    {FileFormat::automatic, "automatic"},
+}};
+constexpr const auto& enum_names(FileFormat) {
+  return kFileFormatNames;
+}
+constexpr std::string_view enum_noun(FileFormat) {
+  return "format";
+}
+
+/// Short lowercase name of a format ("pcd", "ply", ..., "auto"), from kFileFormatNames.
+[[nodiscard]] inline std::string to_string(FileFormat format) {
+  return std::string(enum_name(format));
+}
 
 /// The format implied by a path's extension; throws FormatError when it is not known.
 [[nodiscard]] FileFormat format_from_extension(const std::filesystem::path& path);
@@ -69,6 +90,17 @@ struct ReadResult {
 
 /// Encoding of the written file (ignored for XYZ, which is always text).
 enum class Encoding { binary, ascii };
+
+inline constexpr std::array<EnumName<Encoding>, 2> kEncodingNames{{
+    {Encoding::binary, "binary"},
+    {Encoding::ascii, "ascii"},
+}};
+constexpr const auto& enum_names(Encoding) {
+  return kEncodingNames;
+}
+constexpr std::string_view enum_noun(Encoding) {
+  return "encoding";
+}
 
 /// Writes x y z of every point as PLY, PCD or XYZ (chosen from the extension unless given).
 /// Binary PLY is little endian, binary PCD is uncompressed "binary". Throws IoError.

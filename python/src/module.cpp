@@ -353,20 +353,14 @@ FileFormat format_from_object(const py::handle& value) {
     throw py::type_error("format must be a str, got " + type_name(value));
   }
   const std::string name = value.cast<std::string>();
-  if (name == "auto") return FileFormat::automatic;
-  for (const auto f : {FileFormat::pcd, FileFormat::ply, FileFormat::kitti_bin, FileFormat::xyz,
-                       FileFormat::vtk, FileFormat::f32}) {
-    if (name == to_string(f)) return f;
-  }
-  throw FormatError("unknown format '" + name +
-                    "' (expected 'auto', 'pcd', 'ply', 'kitti_bin', 'xyz', 'vtk' or 'f32')");
+  if (const FileFormat* format = find_enum<FileFormat>(name)) return *format;
+  throw FormatError("unknown format '" + name + "' (expected " + name_list<FileFormat>() + ")");
 }
 
 Encoding encoding_from_object(const py::handle& value) {
   const std::string name = py::isinstance<py::str>(value) ? value.cast<std::string>() : "";
-  if (name == "binary") return Encoding::binary;
-  if (name == "ascii") return Encoding::ascii;
-  throw py::value_error("encoding must be 'binary' or 'ascii', got " +
+  if (const Encoding* encoding = find_enum<Encoding>(name)) return *encoding;
+  throw py::value_error("encoding must be " + name_list<Encoding>() + ", got " +
                         std::string(py::repr(value)));
 }
 

@@ -44,26 +44,6 @@ ReadResult parse_point_cloud(const std::string& name, std::string_view data, Fil
 
 }  // namespace
 
-std::string to_string(FileFormat format) {
-  switch (format) {
-    case FileFormat::automatic:
-      return "automatic";
-    case FileFormat::pcd:
-      return "pcd";
-    case FileFormat::ply:
-      return "ply";
-    case FileFormat::kitti_bin:
-      return "kitti_bin";
-    case FileFormat::xyz:
-      return "xyz";
-    case FileFormat::vtk:
-      return "vtk";
-    case FileFormat::f32:
-      return "f32";
-  }
-  return "unknown";
-}
-
 FileFormat format_from_extension(const std::filesystem::path& path) {
   const std::string extension = lowercase(path.extension().string());
   if (extension == ".pcd") return FileFormat::pcd;
