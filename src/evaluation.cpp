@@ -7,6 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "point_surfaces.hpp"
+
 namespace sgdicp {
 namespace {
 
@@ -19,26 +21,14 @@ std::size_t sample_index(std::size_t k, std::size_t count, std::size_t n) {
   return std::min(n - 1, static_cast<std::size_t>(phase * static_cast<double>(n)));
 }
 
-// Unit normal of the reference at point `index`: from the cloud when it has normals, else the
-// smallest principal axis of its k nearest neighbours (zero when they do not span a plane).
+// Unit normal of the reference at point `index`: from the cloud when it has normals, else from
+// its k nearest neighbours by the library's one estimator (zero when they span no plane).
 Eigen::Vector3d reference_normal(const ReferenceIndex& reference, std::uint32_t index,
-                                 std::size_t k, std::vector<Neighbor>& scratch) {
+                                 const NeighborhoodSettings& stored,
+                                 std::vector<Neighbor>& scratch) {
   const PointCloud& cloud = reference.cloud();
   if (cloud.has_normals()) return cloud.normals[index].cast<double>();
-  reference.k_nearest(cloud.points[index], k, scratch);
-  if (scratch.size() < 3) return Eigen::Vector3d::Zero();
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& n : scratch) mean += cloud.points[n.index].cast<double>();
-  mean /= static_cast<double>(scratch.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& n : scratch) {
-    const Eigen::Vector3d d = cloud.points[n.index].cast<double>() - mean;
-    cov.noalias() += d * d.transpose();
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  // Collinear or coincident neighbours define no plane.
-  if (eig.eigenvalues()[1] <= 1e-12 * eig.eigenvalues()[2]) return Eigen::Vector3d::Zero();
-  return eig.eigenvectors().col(0);
+  return detail::estimate_surface(reference, index, stored, scratch).normal.cast<double>();
 }
 
 }  // namespace
@@ -112,13 +102,16 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
   }
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
   std::vector<Neighbor> scratch;
+  NeighborhoodSettings neighborhood;
+  neighborhood.k = std::clamp<std::size_t>(settings.normal_neighbors, 3, 1000);
+  const NeighborhoodSettings stored = detail::in_stored_frame(neighborhood, reference.cloud());
   // A thousand pairs pin the eigenvalues down well; more only cost k-nearest queries.
   const std::size_t used = std::min(pairs.size(), settings.degeneracy_pairs);
   for (std::size_t k = 0; k < used; ++k) {
     const auto& p = pairs[sample_index(k, used, pairs.size())];
-    const Eigen::Vector3d normal = normals ? normals(p.reference_index).cast<double>()
-                                           : reference_normal(reference, p.reference_index,
-                                                              settings.normal_neighbors, scratch);
+    const Eigen::Vector3d normal =
+        normals ? normals(p.reference_index).cast<double>()
+                : reference_normal(reference, p.reference_index, stored, scratch);
     const Eigen::Vector3d q = (p.moved - centroid) / spread;
     Eigen::Matrix<double, 6, 1> j;
     j << normal, q.cross(normal);

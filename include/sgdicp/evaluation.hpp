@@ -32,7 +32,8 @@ struct EvaluationSettings {
   double degenerate_below = 1e-2;
   /// Pairs (spread the same way) used for the degeneracy check.
   std::size_t degeneracy_pairs = 1000;
-  /// Neighbours for reference normals when the reference cloud has none.
+  /// Neighbours for reference normals when the reference cloud has none (the estimator of
+  /// estimate_normals, preprocessing.hpp; clamped to its range [3, 1000]).
   std::size_t normal_neighbors = 10;
 };
 
@@ -42,8 +43,8 @@ using ReferenceNormals = std::function<Eigen::Vector3f(std::uint32_t)>;
 /// Fills result.evaluated_points, inliers, inlier_ratio, inlier_rmse_m, constraint_ratio and
 /// degenerate for the transform in result.T_reference_source and pairs within max_distance_m.
 /// The degeneracy check takes the reference normals from `normals` when given (a registration's
-/// own, so that they are the ones its cost used), else from the cloud, else from a PCA of
-/// settings.normal_neighbors neighbours.
+/// own, so that they are the ones its cost used), else from the cloud, else from
+/// settings.normal_neighbors neighbours by the estimator of estimate_normals.
 void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
                         double max_distance_m, const EvaluationSettings& settings,
                         RegistrationResult& result, const ReferenceNormals& normals = {});
