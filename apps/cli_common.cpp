@@ -80,7 +80,8 @@ void add_depth_options(CLI::App& app, DepthOptions& o) {
                  "Pinhole intrinsics of .png depth images (pixels): a 3x3 K file or fx,fy,cx,cy "
                  "[default: camera-intrinsics.txt beside the image]");
   app.add_option("--depth-scale", o.settings.depth_units_per_m,
-                 "Depth units per metre of 16-bit .png depth images (TUM RGB-D: 5000) [default: " +
+                 "Depth units per metre of 16-bit .png depth images; 0 = the data's own: 5000 for "
+                 "a TUM RGB-D sequence, else 1000 (millimetres) [default: " +
                      format_number(d.depth_units_per_m) + "]");
   app.add_option("--max-depth", o.settings.max_depth_m,
                  "Depth image pixels deeper than this are dropped, m [default: " +

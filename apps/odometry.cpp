@@ -101,25 +101,64 @@ void write_report_csv(const std::string& path, const FrameSource& source,
 
 // The ground truth as poses of the frames, relative to the first: checked against the frame
 // count, moved into the sensor frame by a KITTI calibration when given.
-std::vector<Eigen::Matrix4d> load_ground_truth(const OdometryOptions& o, std::size_t frames) {
+// The ground truth of the frames an evaluation compares: `frames[i]` is matched with `poses[i]`.
+struct GroundTruth {
+  std::vector<std::size_t> frames;
+  std::vector<Eigen::Matrix4d> poses;
+};
+
+// Frames and ground truth both with timestamps (TUM): matched in time within 0.02 s, as the
+// TUM benchmark's associate.py does; frames without a match are left out, and said so.
+GroundTruth associated_ground_truth(const OdometryOptions& o, const Trajectory& truth,
+                                    const std::vector<double>& frame_times_s) {
+  const auto matches = associate_timestamps(frame_times_s, truth.timestamps_s);
+  GroundTruth out;
+  for (std::size_t k = 0; k < matches.size(); ++k) {
+    if (!matches[k]) continue;
+    out.frames.push_back(k);
+    out.poses.push_back(truth.poses[*matches[k]]);
+  }
+  if (out.frames.size() < 2) {
+    throw InvalidInputError("--ground-truth " + o.ground_truth + ": " +
+                            std::to_string(out.frames.size()) +
+                            " frames have a ground-truth pose within 0.02 s (timestamps compared)");
+  }
+  std::cout << "ground truth associated by timestamp (within 0.02 s): " << out.frames.size()
+            << " of " << frame_times_s.size() << " frames\n";
+  return out;
+}
+
+GroundTruth load_ground_truth(const OdometryOptions& o, const FrameSource& source,
+                              std::size_t frames) {
   Trajectory truth = read_trajectory(o.ground_truth);
-  if (truth.poses.size() != frames) {
-    if (truth.poses.size() < frames || !o.ground_truth_prefix) {
-      throw InvalidInputError("--ground-truth " + o.ground_truth + ": " +
-                              std::to_string(truth.poses.size()) + " poses for " +
-                              std::to_string(frames) + " frames" +
-                              (truth.poses.size() > frames
-                                   ? " (add --ground-truth-prefix to compare with its first poses)"
-                                   : ""));
+  GroundTruth out;
+  if (!truth.timestamps_s.empty() && source.timestamps_s.size() >= frames) {
+    const std::vector<double> times(
+        source.timestamps_s.begin(),
+        source.timestamps_s.begin() + static_cast<std::ptrdiff_t>(frames));
+    out = associated_ground_truth(o, truth, times);
+  } else {
+    if (truth.poses.size() != frames) {
+      if (truth.poses.size() < frames || !o.ground_truth_prefix) {
+        throw InvalidInputError(
+            "--ground-truth " + o.ground_truth + ": " + std::to_string(truth.poses.size()) +
+            " poses for " + std::to_string(frames) + " frames" +
+            (truth.poses.size() > frames
+                 ? " (add --ground-truth-prefix to compare with its first poses)"
+                 : ""));
+      }
+      truth.poses.resize(frames);
     }
-    truth.poses.resize(frames);
+    out.poses = std::move(truth.poses);
+    for (std::size_t k = 0; k < frames; ++k) out.frames.push_back(k);
   }
   if (!o.ground_truth_calib.empty()) {
     const Eigen::Matrix4d Tr = read_kitti_calibration_tr(o.ground_truth_calib);
     const Eigen::Matrix4d Tr_inv = Tr.inverse();
-    for (auto& G : truth.poses) G = Tr_inv * G * Tr;  // camera poses -> sensor poses
+    for (auto& G : out.poses) G = Tr_inv * G * Tr;  // camera poses -> sensor poses
   }
-  return relative_to_first(truth.poses);
+  out.poses = relative_to_first(out.poses);
+  return out;
 }
 
 void print_evaluation(const std::vector<Eigen::Matrix4d>& estimate,
@@ -163,8 +202,8 @@ void run(const OdometryOptions& o) {
   const double rate_hz =
       o.rate_hz > 0.0 ? o.rate_hz : (source.nominal_rate_hz > 0.0 ? source.nominal_rate_hz : 10.0);
   const std::size_t frames = o.max_frames ? std::min(o.max_frames, source.size()) : source.size();
-  std::optional<std::vector<Eigen::Matrix4d>> truth;
-  if (!o.ground_truth.empty()) truth = load_ground_truth(o, frames);
+  std::optional<GroundTruth> truth;
+  if (!o.ground_truth.empty()) truth = load_ground_truth(o, source, frames);
 
   Odometry odometry(settings, method.name, method.sgd, method.batch);
   const auto start = std::chrono::steady_clock::now();
@@ -230,7 +269,11 @@ void run(const OdometryOptions& o) {
             << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
             << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
             << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum) << '\n';
-  if (truth) print_evaluation(odometry.poses(), *truth);
+  if (truth) {
+    std::vector<Eigen::Matrix4d> compared;
+    for (const std::size_t k : truth->frames) compared.push_back(odometry.poses()[k]);
+    print_evaluation(compared, truth->poses);
+  }
 }
 
 }  // namespace
@@ -260,11 +303,12 @@ void add_odometry_command(CLI::App& app) {
                   "timestamps from the source when known, else frame / --rate");
   cmd->add_option("--rate", o->rate_hz,
                   "Frame rate for TUM timestamps when the source has none, Hz [default: 0 = the "
-                  "layout's: 7-Scenes 30, else 10]");
+                  "layout's: 7-Scenes and TUM 30, else 10]");
   cmd->add_option("--ground-truth", o->ground_truth,
                   "Ground-truth poses, one per frame: a KITTI poses file (12 numbers per line), a "
-                  "TUM file (8 numbers per line) or a 7-Scenes folder (frame-*.pose.txt); prints "
-                  "RPE, KITTI drift, ATE and end drift");
+                  "TUM file (8 numbers per line; matched to the frames by timestamp within "
+                  "0.02 s when the frames have timestamps, as TUM's associate.py) or a 7-Scenes "
+                  "folder (frame-*.pose.txt); prints RPE, KITTI drift, ATE and end drift");
   cmd->add_flag("--ground-truth-prefix", o->ground_truth_prefix,
                 "Compare with the first poses of a longer ground truth (a KITTI poses file of the "
                 "whole sequence for its first frames)");

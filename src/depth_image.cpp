@@ -261,10 +261,10 @@ void PinholeIntrinsics::validate() const {
 }
 
 void DepthImageSettings::validate() const {
-  if (!std::isfinite(depth_units_per_m) || depth_units_per_m <= 0.0 ||
+  if (!std::isfinite(depth_units_per_m) || depth_units_per_m < 0.0 ||
       depth_units_per_m > kMaxUnitsPerMetre) {
     bad_setting("depth_units_per_m = " + number_text(depth_units_per_m) +
-                " must be in (0, 1e9] units per metre");
+                " must be 0 (the data's own) or in (0, 1e9] units per metre");
   }
   if (!std::isfinite(max_depth_m) || max_depth_m <= 0.0 || max_depth_m > kMaxDepthLimit_m) {
     bad_setting("max_depth_m = " + number_text(max_depth_m) + " must be in (0, 1e6] m");
@@ -339,7 +339,8 @@ PointCloud depth_image_to_cloud(const std::uint16_t* depth, int width, int heigh
                                 const PinholeIntrinsics& intrinsics,
                                 const DepthImageSettings& settings, DepthImageReport* report) {
   if (!depth) throw InvalidInputError("depth image: no pixel data");
-  const double units = settings.depth_units_per_m;
+  const double units = settings.depth_units_per_m > 0.0 ? settings.depth_units_per_m
+                                                        : kDefaultDepthUnitsPerMetre;
   return back_project(width, height, intrinsics, settings, report,
                       [&](std::size_t i) { return depth[i] / units; });
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <fstream>
 #include <optional>
 
@@ -60,6 +61,40 @@ std::vector<std::filesystem::path> sevenscenes_frames(const std::filesystem::pat
   return out;
 }
 
+// A TUM RGB-D sequence's depth.txt: "timestamp path" per frame, paths relative to the folder,
+// '#' comments. Fills the frames and their timestamps; false when the folder has no depth.txt.
+bool read_tum_depth_list(const std::filesystem::path& folder, FrameSource& source) {
+  const std::filesystem::path list = folder / "depth.txt";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(list, ec)) return false;
+  std::ifstream in(list);
+  if (!in) throw IoError(list.string() + ": cannot open");
+  std::size_t line_number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_number;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const auto gap = line.find_first_of(" \t", first);
+    const auto name = gap == std::string::npos ? gap : line.find_first_not_of(" \t", gap);
+    const auto last = line.find_last_not_of(" \t\r");
+    double t = 0.0;
+    if (name == std::string::npos ||
+        !parse_number(std::string_view(line).substr(first, gap - first), t) || !std::isfinite(t) ||
+        line.find_first_of(" \t", name) < last) {
+      throw FormatError(list.string() + ": line " + std::to_string(line_number) +
+                        ": expected 'timestamp path' (the TUM RGB-D depth.txt)");
+    }
+    if (!source.timestamps_s.empty() && t <= source.timestamps_s.back()) {
+      throw FormatError(list.string() + ": line " + std::to_string(line_number) +
+                        ": timestamps must increase");
+    }
+    source.timestamps_s.push_back(t);
+    source.frames.push_back(folder / line.substr(name, last - name + 1));
+  }
+  if (source.frames.empty()) throw FormatError(list.string() + ": no frame listed");
+  return true;
+}
+
 }  // namespace
 
 PointCloud FrameSource::read(std::size_t i) const {
@@ -75,6 +110,25 @@ FrameSource open_frame_source(const std::filesystem::path& input,
     throw IoError(input.string() + ": not a folder (odometry reads a folder of frames)");
   }
   FrameSource source;
+  if (read_tum_depth_list(input, source)) {
+    source.layout = "tum";
+    source.folder = input;
+    source.nominal_rate_hz = 30.0;
+    depth.validate();
+    source.depth = depth;
+    if (source.depth.depth_units_per_m == 0.0) {
+      source.depth.depth_units_per_m = kTumDepthUnitsPerMetre;
+    }
+    if (!intrinsics) {
+      throw InvalidSettingsError(
+          input.string() +
+          ": a TUM RGB-D sequence has no intrinsics file: give them (--intrinsics fx,fy,cx,cy; "
+          "the benchmark's calibration lists e.g. freiburg1 517.3,516.5,318.6,255.3)");
+    }
+    intrinsics->validate();
+    source.intrinsics = intrinsics;
+    return source;
+  }
   source.frames = sevenscenes_frames(input);
   if (!source.frames.empty()) {
     source.layout = "7scenes";

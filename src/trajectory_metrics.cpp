@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numbers>
 #include <string>
 
@@ -186,6 +187,40 @@ std::vector<Eigen::Matrix4d> relative_to_first(const std::vector<Eigen::Matrix4d
   if (poses.empty()) return out;
   const Eigen::Matrix4d first_inverse = inverse(poses.front());
   for (const auto& T : poses) out.push_back(first_inverse * T);
+  return out;
+}
+
+std::vector<std::optional<std::size_t>> associate_timestamps(const std::vector<double>& frames_s,
+                                                             const std::vector<double>& truth_s,
+                                                             double max_difference_s) {
+  if (!std::isfinite(max_difference_s) || max_difference_s < 0.0) {
+    throw InvalidInputError(
+        "timestamp association: the largest difference must be finite and "
+        ">= 0 s");
+  }
+  for (std::size_t k = 0; k < truth_s.size(); ++k) {
+    if (!std::isfinite(truth_s[k]) || (k > 0 && truth_s[k] < truth_s[k - 1])) {
+      throw InvalidInputError("timestamp association: ground-truth time " + std::to_string(k) +
+                              " is not finite or not in ascending order");
+    }
+  }
+  std::vector<std::optional<std::size_t>> out;
+  out.reserve(frames_s.size());
+  for (const double t : frames_s) {
+    if (!std::isfinite(t))
+      throw InvalidInputError("timestamp association: a frame time is not finite");
+    const auto after = std::lower_bound(truth_s.begin(), truth_s.end(), t);
+    std::optional<std::size_t> best;
+    double best_difference = max_difference_s;
+    for (auto it = after == truth_s.begin() ? after : std::prev(after);
+         it != truth_s.end() && it <= after; ++it) {
+      if (std::abs(*it - t) <= best_difference) {
+        best = static_cast<std::size_t>(it - truth_s.begin());
+        best_difference = std::abs(*it - t);
+      }
+    }
+    out.push_back(best);
+  }
   return out;
 }
 

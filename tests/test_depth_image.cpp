@@ -13,7 +13,9 @@
 
 #include "sgdicp/depth_image.hpp"
 #include "sgdicp/error.hpp"
+#include "sgdicp/frame_source.hpp"
 #include "sgdicp/io.hpp"
+#include "sgdicp/trajectory_metrics.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {
@@ -225,7 +227,7 @@ TEST(DepthImage, BadSettingsAndIntrinsicsAreTypedErrors) {
   s.min_depth_m = 20.0;
   EXPECT_NE(run(kK, s).find("min_depth_m"), std::string::npos);
   s = {};
-  s.depth_units_per_m = 0.0;
+  s.depth_units_per_m = -1.0;
   EXPECT_NE(run(kK, s).find("depth_units_per_m"), std::string::npos);
   EXPECT_THROW((void)depth_image_to_cloud(depth.data(), 0, 1, kK, {}, nullptr), InvalidInputError);
   EXPECT_THROW(
@@ -401,6 +403,74 @@ TEST(DepthSevenScenes, FrameMatchesThePythonBackProjection) {
     worst = std::max(worst, static_cast<double>((cloud.points[i] - python.points[i]).norm()));
   }
   EXPECT_LT(worst, 1e-6);
+}
+
+// ---- TUM RGB-D sequences (frame_source.hpp)
+
+// A TUM-layout folder: depth.txt (with the benchmark's comment header) listing three 4 x 3
+// frames of depth 5000 (1 m at TUM's 5000 units per metre).
+fs::path tum_folder(const test::TempDir& dir, const std::string& list) {
+  fs::create_directories(dir.path() / "depth");
+  const std::vector<std::uint16_t> depth(4 * 3, 5000);
+  for (const char* name : {"1305031102.160407", "1305031102.194330", "1305031102.226738"}) {
+    write_file(dir.path() / "depth" / (std::string(name) + ".png"), png(4, 3, depth));
+  }
+  write_file(dir.path() / "depth.txt", list);
+  return dir.path();
+}
+
+const char* const kTumList =
+    "# depth maps\n# file: 'rgbd_dataset_freiburg1_xyz.bag'\n# timestamp filename\n"
+    "1305031102.160407 depth/1305031102.160407.png\n"
+    "1305031102.194330 depth/1305031102.194330.png\r\n"
+    "\n1305031102.226738 depth/1305031102.226738.png\n";
+
+TEST(TumSequence, DepthListGivesFramesTimestampsAndTheTumDepthScale) {
+  const test::TempDir dir;
+  const fs::path folder = tum_folder(dir, kTumList);
+  const FrameSource source = open_frame_source(folder, kK);
+  EXPECT_EQ(source.layout, "tum");
+  ASSERT_EQ(source.size(), 3U);
+  EXPECT_EQ(source.frames[1], folder / "depth" / "1305031102.194330.png");
+  ASSERT_EQ(source.timestamps_s.size(), 3U);
+  EXPECT_DOUBLE_EQ(source.timestamps_s[2], 1305031102.226738);
+  EXPECT_EQ(source.nominal_rate_hz, 30.0);
+  EXPECT_EQ(source.read(0).points[0].z(), 1.0F);  // 5000 / 5000 units per metre
+  DepthImageSettings millimetres;
+  millimetres.depth_units_per_m = 1000.0;  // given: used as it is
+  EXPECT_EQ(open_frame_source(folder, kK, millimetres).read(0).points[0].z(), 5.0F);
+}
+
+TEST(TumSequence, BadListsAndMissingIntrinsicsAreClearErrors) {
+  const test::TempDir dir;
+  const fs::path folder = tum_folder(dir, kTumList);
+  EXPECT_NE(error_of([&] { (void)open_frame_source(folder); }).find("TUM"), std::string::npos);
+  for (const auto& [list, what] :
+       {std::pair<std::string, std::string>{"banana depth/a.png\n", "line 1"},
+        {"1.0\n", "line 1"},
+        {"# c\n2.0 depth/a.png\n1.0 depth/b.png\n", "line 3: timestamps must increase"},
+        {"1.0 depth/a b.png\n", "line 1"},
+        {"# only comments\n", "no frame listed"}}) {
+    write_file(folder / "depth.txt", list);
+    EXPECT_NE(error_of([&] { (void)open_frame_source(folder, kK); }).find(what), std::string::npos)
+        << list;
+  }
+}
+
+TEST(TumSequence, GroundTruthIsAssociatedByTimestamp) {
+  // Ground truth at 100 Hz from t = 10.000 s; frames at 30 Hz, one beyond the truth's end.
+  std::vector<double> truth;
+  for (int k = 0; k < 50; ++k) truth.push_back(10.0 + 0.01 * k);
+  const std::vector<double> frames{10.003, 10.036, 10.0449, 10.8};
+  const auto matches = associate_timestamps(frames, truth);
+  ASSERT_EQ(matches.size(), 4U);
+  EXPECT_EQ(matches[0], std::optional<std::size_t>(0));
+  EXPECT_EQ(matches[1], std::optional<std::size_t>(4));  // 10.04 is nearer than 10.03
+  EXPECT_EQ(matches[2], std::optional<std::size_t>(4));
+  EXPECT_FALSE(matches[3].has_value());  // 0.31 s after the last pose
+  EXPECT_FALSE(associate_timestamps({10.003}, truth, 0.001)[0].has_value());
+  EXPECT_THROW((void)associate_timestamps(frames, {2.0, 1.0}), InvalidInputError);
+  EXPECT_THROW((void)associate_timestamps(frames, truth, -1.0), InvalidInputError);
 }
 
 }  // namespace

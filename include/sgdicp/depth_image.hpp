@@ -34,10 +34,17 @@ struct PinholeIntrinsics {
   bool operator==(const PinholeIntrinsics&) const = default;
 };
 
+/// Depth units per metre of 16-bit depth images: millimetres (7-Scenes, Kinect and RealSense
+/// tools), and the TUM RGB-D benchmark's 1/5000 m.
+inline constexpr double kDefaultDepthUnitsPerMetre = 1000.0;
+inline constexpr double kTumDepthUnitsPerMetre = 5000.0;
+
 struct DepthImageSettings {
   /// Stored depth units per metre of a 16-bit image: 1000 (millimetres: 7-Scenes, most Kinect
-  /// and RealSense tools), 5000 (TUM RGB-D). Float images are in metres and ignore it.
-  double depth_units_per_m = 1000.0;
+  /// and RealSense tools), 5000 (TUM RGB-D). 0 = the data's own: kTumDepthUnitsPerMetre for the
+  /// frames of a TUM RGB-D sequence (frame_source.hpp), else kDefaultDepthUnitsPerMetre. Float
+  /// images are in metres and ignore it.
+  double depth_units_per_m = 0.0;
   /// Deeper pixels are dropped (invalid_range). 10 m is beyond the working range of consumer
   /// depth cameras (Kinect v1 0.8-4 m, RealSense D4xx <= 10 m), whose depth error grows with
   /// the square of the range; it also drops the 65535 sentinel (65.5 m in millimetres).
@@ -48,7 +55,7 @@ struct DepthImageSettings {
   /// Take every n-th pixel in x and y (1 = all): thins the cloud n^2-fold before anything else.
   int pixel_stride = 1;
 
-  /// Throws InvalidSettingsError naming the field unless depth_units_per_m is in (0, 1e9],
+  /// Throws InvalidSettingsError naming the field unless depth_units_per_m is 0 or in (0, 1e9],
   /// 0 <= min_depth_m < max_depth_m <= 1e6 (all finite) and pixel_stride in [1, 65536].
   void validate() const;
   bool operator==(const DepthImageSettings&) const = default;

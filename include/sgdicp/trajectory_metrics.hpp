@@ -81,6 +81,14 @@ inline constexpr std::array<double, 8> kKittiSegmentLengths_m{100, 200, 300, 400
 /// Ground-truth path length: the sum of the distances between consecutive positions, metres.
 [[nodiscard]] double path_length_m(const std::vector<Eigen::Matrix4d>& poses);
 
+/// For each frame timestamp, the index of the ground-truth pose nearest in time, if one lies
+/// within max_difference_s (the TUM benchmark's associate.py matches within 0.02 s), else
+/// nullopt. Seconds; truth_s must be sorted ascending (InvalidInputError otherwise, and for a
+/// non-finite time or a negative or non-finite max_difference_s).
+[[nodiscard]] std::vector<std::optional<std::size_t>> associate_timestamps(
+    const std::vector<double>& frames_s, const std::vector<double>& truth_s,
+    double max_difference_s = 0.02);
+
 /// The poses re-expressed from the first one: T_0^-1 T_k (the first becomes the identity).
 [[nodiscard]] std::vector<Eigen::Matrix4d> relative_to_first(
     const std::vector<Eigen::Matrix4d>& poses);

@@ -1303,7 +1303,7 @@ _Intrinsics = Union[tuple[float, float, float, float], npt.ArrayLike, _Path]
 def read_depth_image(
     path: _Path,
     intrinsics: _Intrinsics,
-    depth_scale: float = 1000.0,
+    depth_scale: float = 0.0,
     max_depth: float = 10.0,
     min_depth: float = 0.0,
     pixel_stride: int = 1,
@@ -1321,7 +1321,7 @@ def read_depth_image(
 def depth_to_points(
     depth: npt.ArrayLike,
     intrinsics: _Intrinsics,
-    depth_scale: float = 1000.0,
+    depth_scale: float = 0.0,
     max_depth: float = 10.0,
     min_depth: float = 0.0,
     pixel_stride: int = 1,
