@@ -666,7 +666,7 @@ else
   skip "depth image checks (python3 missing to write the PNGs)"
 fi
 run register --help
-if grep -q -- '--depth-scale FLOAT .*\[default: 1000\]' "$tmp/out" &&
+if grep -q -- '--depth-scale FLOAT .*data.s own.*\[default: 0\]' "$tmp/out" &&
   grep -q -- '--max-depth FLOAT .*m \[default: 10\]' "$tmp/out"; then
   pass "register --help gives the depth options with unit and default"
 else
