@@ -339,8 +339,8 @@ PointCloud depth_image_to_cloud(const std::uint16_t* depth, int width, int heigh
                                 const PinholeIntrinsics& intrinsics,
                                 const DepthImageSettings& settings, DepthImageReport* report) {
   if (!depth) throw InvalidInputError("depth image: no pixel data");
-  const double units = settings.depth_units_per_m > 0.0 ? settings.depth_units_per_m
-                                                        : kDefaultDepthUnitsPerMetre;
+  const double units =
+      settings.depth_units_per_m > 0.0 ? settings.depth_units_per_m : kDefaultDepthUnitsPerMetre;
   return back_project(width, height, intrinsics, settings, report,
                       [&](std::size_t i) { return depth[i] / units; });
 }

@@ -116,7 +116,8 @@ void bind_depth(py::module_& m) {
       "float32 array, metres, in the camera frame (x right, y down, z forward), row by row "
       "(docs/depth.md). intrinsics: (fx, fy, cx, cy) in pixels, a 3x3 camera matrix, or the path "
       "of a 3x3 K file (the 7-Scenes camera-intrinsics.txt). depth_scale: stored units per metre, "
-      "0 = 1000 (millimetres; TUM RGB-D: 5000). Pixels of depth 0, or outside [min_depth, max_depth] metres, are "
+      "0 = 1000 (millimetres; TUM RGB-D: 5000). Pixels of depth 0, or outside [min_depth, "
+      "max_depth] metres, are "
       "dropped; pixel_stride takes every n-th pixel in x and y. Raises IoError (OSError), "
       "FormatError (not a 16-bit greyscale PNG, truncated, too many pixels) or "
       "InvalidSettingsError (ValueError).");
