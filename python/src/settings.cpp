@@ -293,6 +293,10 @@ std::string repr(const BatchSettings& s) {
               s.check_degeneracy, s.record_trace, s.robust_scaling, s.num_threads, s.voxel_size_m,
               s.downsample_to);
 }
+// The attributes that the library's settings tables describe (settings.hpp) are bound with an
+// empty docstring here: document_attributes() sets each from its table entry (help, unit,
+// range, keyword, default), so that the text has one source. The others are written here.
+
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
 template <typename T>
 void def_value_methods(py::class_<T>& c) {
@@ -328,25 +332,17 @@ void def_flag(py::class_<Class>& c, const char* name, bool Class::*member, const
 
 // voxel_size_m and downsample_to, which both settings classes have (settings.hpp).
 template <typename Class>
-void def_voxel_grid(py::class_<Class>& c, const char* size_doc, const char* count_doc) {
+void def_voxel_grid(py::class_<Class>& c) {
   c.def_property(
       "voxel_size_m", [](const Class& s) { return s.voxel_size_m; },
-      [](Class& s, const py::handle& v) { s.voxel_size_m = as_real(v, "voxel_size_m"); }, size_doc);
+      [](Class& s, const py::handle& v) { s.voxel_size_m = as_real(v, "voxel_size_m"); }, "");
   c.def_property(
       "downsample_to", [](const Class& s) { return s.downsample_to; },
       [](Class& s, const py::handle& v) {
         s.downsample_to = static_cast<std::size_t>(as_count(v, "downsample_to"));
       },
-      count_doc);
+      "");
 }
-
-#define SGDICP_VOXEL_SIZE_DOC                                                                \
-  "Thin both clouds to one point (the centroid) per voxel of this side before registering, " \
-  "metres; 0 = the grid downsample_to chooses. Default 0."
-#define SGDICP_DOWNSAMPLE_TO_DOC                                                             \
-  "Without voxel_size_m: the voxel grid that keeps about this many points of the reference " \
-  "(chosen from the data, +-15 %), applied to both clouds; clouds with at most this many "   \
-  "points, or with normals given, are used as they are; 0 = no downsampling."
 
 template <typename Class>
 void def_distance(py::class_<Class>& c, const char* name, Distance Class::*member,
@@ -546,28 +542,15 @@ void bind_optimizer(py::module_& m) {
           [](OptimizerSettings& o, const py::handle& v) {
             o.type = enum_from_object<OptimizerType>(v, "type");
           },
-          "Step rule: OptimizerType or its name ('sgd', 'momentum', 'rmsprop', 'adam', "
-          "'gauss-newton').")
-      .def_readwrite("learning_rate", &OptimizerSettings::learning_rate,
-                     "alpha of eq. 3, scaled units per unit gradient (Settings() default 0.01 "
-                     "with Adam; the paper's fixed step 2; Gauss-Newton: fraction of a Newton "
-                     "step, 1).")
-      .def_readwrite("momentum", &OptimizerSettings::momentum,
-                     "Momentum: velocity decay, in [0, 1). Default 0.9.")
-      .def_readwrite("beta1", &OptimizerSettings::beta1,
-                     "Adam: decay of the mean of gradients, in [0, 1). Default 0.9.")
-      .def_readwrite("beta2", &OptimizerSettings::beta2,
-                     "Adam: decay of the mean of squared gradients, in [0, 1). Default 0.999.")
-      .def_readwrite("rms_decay", &OptimizerSettings::rms_decay,
-                     "RMSProp: decay of the mean of squared gradients, in [0, 1). Default 0.9.")
-      .def_readwrite("epsilon", &OptimizerSettings::epsilon,
-                     "Adam/RMSProp: added to the root mean square, scaled units. Default 1e-8.")
-      .def_readwrite("hessian_decay", &OptimizerSettings::hessian_decay,
-                     "Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton "
-                     "matrices, in [0, 1). Default 0.9.")
-      .def_readwrite("damping", &OptimizerSettings::damping,
-                     "Gauss-Newton: Levenberg damping relative to the mean diagonal. Default "
-                     "1e-3.")
+          "")
+      .def_readwrite("learning_rate", &OptimizerSettings::learning_rate, "")
+      .def_readwrite("momentum", &OptimizerSettings::momentum, "")
+      .def_readwrite("beta1", &OptimizerSettings::beta1, "")
+      .def_readwrite("beta2", &OptimizerSettings::beta2, "")
+      .def_readwrite("rms_decay", &OptimizerSettings::rms_decay, "")
+      .def_readwrite("epsilon", &OptimizerSettings::epsilon, "")
+      .def_readwrite("hessian_decay", &OptimizerSettings::hessian_decay, "")
+      .def_readwrite("damping", &OptimizerSettings::damping, "")
       .def("validate", &OptimizerSettings::validate,
            "Raises InvalidSettingsError (a ValueError) naming the first invalid value.");
   def_value_methods(optimizer);
@@ -579,22 +562,11 @@ void bind_convergence(py::module_& m) {
       "When a stage is stationary: Hotelling's T^2 test on the window's mini-batch gradients and "
       "a path-efficiency guard, or an absolute tolerance on every step (Settings.convergence).");
   convergence.def(py::init<>());
-  def_count(convergence, "window", &ConvergenceSettings::window,
-            "Iterations per test window, >= 8; also the length of the final iterate average. "
-            "Default 20.");
-  convergence
-      .def_readwrite("chi2", &ConvergenceSettings::chi2,
-                     "Critical chi-square value (6 degrees of freedom) of the test; larger stops "
-                     "earlier. Default 12.59 (95 %).")
-      .def_readwrite("max_path_efficiency", &ConvergenceSettings::max_path_efficiency,
-                     "Largest |sum of steps| / sum of |steps| of a stationary window, in (0, 1]. "
-                     "Default 0.5.")
-      .def_readwrite("translation_tolerance", &ConvergenceSettings::translation_tolerance,
-                     "A window whose steps all move the translation less than this (scaled "
-                     "units) ... Default 1e-6.")
-      .def_readwrite("rotation_tolerance", &ConvergenceSettings::rotation_tolerance,
-                     "... and the angles less than this (sum of |d roll|, |d pitch|, |d yaw|, "
-                     "rad) is stationary. Default 1e-6.");
+  def_count(convergence, "window", &ConvergenceSettings::window, "");
+  convergence.def_readwrite("chi2", &ConvergenceSettings::chi2, "")
+      .def_readwrite("max_path_efficiency", &ConvergenceSettings::max_path_efficiency, "")
+      .def_readwrite("translation_tolerance", &ConvergenceSettings::translation_tolerance, "")
+      .def_readwrite("rotation_tolerance", &ConvergenceSettings::rotation_tolerance, "");
   def_value_methods(convergence);
 
   py::class_<RefinementSettings> refinement(
@@ -602,18 +574,11 @@ void bind_convergence(py::module_& m) {
       "Refinement stages after the paper's coarse phase: each shrinks d_max to the data and "
       "decays the step (Settings.refinement).");
   refinement.def(py::init<>());
-  def_count(refinement, "stages", &RefinementSettings::stages,
-            "Refinement stages after the coarse phase (0 = the paper's single phase). Default 3.");
-  refinement
-      .def_readwrite("step_decay", &RefinementSettings::step_decay,
-                     "Step-size multiplier per stage, in (0, 1]. Default 0.5.")
-      .def_readwrite("distance_factor", &RefinementSettings::distance_factor,
-                     "New d_max = factor x median pair distance of the stage. Default 3.");
-  def_flag(refinement, "gauss_newton", &RefinementSettings::gauss_newton,
-           "The refinement stages take Gauss-Newton steps whatever the coarse stage's rule. "
-           "Default True.");
-  def_distance(refinement, "min_distance", &RefinementSettings::min_distance,
-               "Floor of d_max, a Distance. Default Distance.scaled(1e-4).");
+  def_count(refinement, "stages", &RefinementSettings::stages, "");
+  refinement.def_readwrite("step_decay", &RefinementSettings::step_decay, "")
+      .def_readwrite("distance_factor", &RefinementSettings::distance_factor, "");
+  def_flag(refinement, "gauss_newton", &RefinementSettings::gauss_newton, "");
+  def_distance(refinement, "min_distance", &RefinementSettings::min_distance, "");
   def_value_methods(refinement);
 }
 
@@ -623,8 +588,7 @@ void bind_neighborhood(py::module_& m) {
       "k-nearest neighbourhoods for the normals and covariances of the plane costs "
       "(Settings.neighborhood).");
   neighborhood.def(py::init<>());
-  def_count(neighborhood, "k", &NeighborhoodSettings::k,
-            "Neighbours per point, the point included, in [3, 1000]. Default 20.");
+  def_count(neighborhood, "k", &NeighborhoodSettings::k, "");
   def_count(neighborhood, "num_threads", &NeighborhoodSettings::num_threads,
             "Worker threads of the estimation; 0 = all cores (the results are the same for any "
             "count). Default 0.");
@@ -685,11 +649,9 @@ void bind_sgd_settings(py::module_& m) {
       .def(
           "validate", [](const SgdSettings& s) { s.validate(); },
           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.");
-  def_count(settings, "batch_size", &SgdSettings::batch_size,
-            "m of the paper: source points per mini-batch. Default 160.");
-  def_distance(
-      settings, "max_correspondence_distance", &SgdSettings::max_correspondence_distance,
-      "d_max: pairs farther apart are rejected, a Distance. Default Distance.scaled(0.5).");
+  def_count(settings, "batch_size", &SgdSettings::batch_size, "");
+  def_distance(settings, "max_correspondence_distance", &SgdSettings::max_correspondence_distance,
+               "");
   settings
       .def_readwrite("optimizer", &SgdSettings::optimizer,
                      "OptimizerSettings. Default Adam with learning rate 0.01.")
@@ -699,67 +661,38 @@ void bind_sgd_settings(py::module_& m) {
                      "UncertaintySettings. Default: no uncertainty.")
       .def_property(
           "cost", [](const SgdSettings& s) { return s.cost; },
-          [](SgdSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); },
-          "Cost of a pair: CostType or its name ('point-to-point', 'point-to-plane', "
-          "'plane-to-plane'). The plane costs need reference normals / covariances (estimated "
-          "for the pairs a run uses). Default CostType.point_to_plane (Settings.paper(): "
-          "point_to_point).")
+          [](SgdSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); }, "")
       .def_property(
           "coarse_cost", [](const SgdSettings& s) { return s.coarse_cost; },
           [](SgdSettings& s, const py::handle& v) {
             s.coarse_cost = cost_from_object(v, "coarse_cost");
           },
-          "Cost of the first (coarse) stage when refinement stages follow; the refinement "
-          "stages and the result use cost. Default CostType.point_to_point (the paper's wide "
-          "basin).")
+          "")
       .def_property(
           "kernel", [](const SgdSettings& s) { return s.kernel; },
           [](SgdSettings& s, const py::handle& v) {
             s.kernel = enum_from_object<KernelType>(v, "kernel");
           },
-          "Robust kernel on each pair's residual: KernelType or its name ('none', 'huber', "
-          "'cauchy', 'geman-mcclure', 'welsch'). Default KernelType.none.")
+          "")
       .def_property(
           "scaling_origin", [](const SgdSettings& s) { return s.scaling_origin; },
           [](SgdSettings& s, const py::handle& v) {
             s.scaling_origin = enum_from_object<ScalingOrigin>(v, "scaling_origin");
           },
-          "Origin of the scaled space and pivot of the rotation. Default ScalingOrigin.center.");
-  def_distance(settings, "kernel_scale", &SgdSettings::kernel_scale,
-               "Scale of the kernel: the residual size where it starts to down-weight, a "
-               "Distance. Default Distance.scaled(0.01).");
-  settings
-      .def_readwrite("trim_ratio", &SgdSettings::trim_ratio,
-                     "Keep only this fraction of each mini-batch's pairs, the closest ones "
-                     "(trimmed ICP, for partial overlap), in (0, 1]. Default 1.")
+          "");
+  def_distance(settings, "kernel_scale", &SgdSettings::kernel_scale, "");
+  settings.def_readwrite("trim_ratio", &SgdSettings::trim_ratio, "")
       .def_readwrite("neighborhood", &SgdSettings::neighborhood,
                      "NeighborhoodSettings for the normals and covariances of the plane costs.");
-  def_count(settings, "max_iterations", &SgdSettings::max_iterations,
-            "Iteration (mini-batch) limit; reaching it means not converged. Default 4000.");
-  def_count(settings, "seed", &SgdSettings::seed,
-            "Seed of the mini-batch sampler; same inputs and seed give the same result. Default "
-            "2019.");
-  def_flag(settings, "average_iterates", &SgdSettings::average_iterates,
-           "Return the mean of the final stage's iterates instead of the last one. Default True.");
-  def_count(
-      settings, "evaluation_points", &SgdSettings::evaluation_points,
-      "Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000.");
-  def_flag(settings, "record_trace", &SgdSettings::record_trace,
-           "Fill RegistrationResult.trace. Default False.");
-  def_flag(settings, "check_degeneracy", &SgdSettings::check_degeneracy,
-           "Check the final alignment for degenerate geometry (a plane, a corridor) and report "
-           "it in RegistrationResult.constraint_ratio / degenerate. Default True.");
-  def_flag(settings, "robust_scaling", &SgdSettings::robust_scaling,
-           "Scale from the bulk of each cloud, so that a few far points do not shrink the scene "
-           "(False: the paper's bounding box of every point); far points are counted in "
-           "RegistrationResult.far_points. Default True.");
-  def_count(settings, "num_threads", &SgdSettings::num_threads,
-            "Threads of one registration (today its KD-tree build, when the reference is given "
-            "as points); 0 = every core. The result is the same for any count. Default 1.");
-  def_voxel_grid(settings, SGDICP_VOXEL_SIZE_DOC,
-                 SGDICP_DOWNSAMPLE_TO_DOC
-                 " Default 20000 (a KITTI scan or a Kinect frame on a "
-                 "grid near small_gicp's recommended 0.25 m / 2 cm).");
+  def_count(settings, "max_iterations", &SgdSettings::max_iterations, "");
+  def_count(settings, "seed", &SgdSettings::seed, "");
+  def_flag(settings, "average_iterates", &SgdSettings::average_iterates, "");
+  def_count(settings, "evaluation_points", &SgdSettings::evaluation_points, "");
+  def_flag(settings, "record_trace", &SgdSettings::record_trace, "");
+  def_flag(settings, "check_degeneracy", &SgdSettings::check_degeneracy, "");
+  def_flag(settings, "robust_scaling", &SgdSettings::robust_scaling, "");
+  def_count(settings, "num_threads", &SgdSettings::num_threads, "");
+  def_voxel_grid(settings);
   def_value_methods(settings);
 }
 
@@ -810,54 +743,29 @@ void bind_batch_settings(py::module_& m) {
           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.")
       .def_property(
           "cost", [](const BatchSettings& s) { return s.cost; },
-          [](BatchSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); },
-          "Cost of a pair: CostType or its name. register(method=...) replaces it with the "
-          "method's cost. Default CostType.point_to_point.");
+          [](BatchSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); }, "");
   def_distance(batch, "max_correspondence_distance", &BatchSettings::max_correspondence_distance,
-               "d_max: pairs farther apart are rejected, a Distance (scaled: fraction of the "
-               "largest side of the joint bounding box). Default Distance.scaled(0.05).");
+               "");
   batch.def_property(
       "kernel", [](const BatchSettings& s) { return s.kernel; },
       [](BatchSettings& s, const py::handle& v) {
         s.kernel = enum_from_object<KernelType>(v, "kernel");
       },
-      "Robust kernel on each pair's residual: KernelType or its name. Default KernelType.none.");
-  def_distance(batch, "kernel_scale", &BatchSettings::kernel_scale,
-               "Scale of the kernel: the residual size where it starts to down-weight, a "
-               "Distance. Default Distance.scaled(0.01).");
-  batch.def_readwrite("trim_ratio", &BatchSettings::trim_ratio,
-                      "Keep only this fraction of each iteration's pairs, the closest ones "
-                      "(trimmed ICP), in (0, 1]. Default 1.");
-  def_count(batch, "max_iterations", &BatchSettings::max_iterations,
-            "Iteration limit (passes over the source); reaching it means not converged. "
-            "Default 100.");
-  batch
-      .def_readwrite("translation_tolerance", &BatchSettings::translation_tolerance,
-                     "Converged when an iteration moves the translation less than this (scaled "
-                     "units) ... Default 1e-5.")
-      .def_readwrite("rotation_tolerance", &BatchSettings::rotation_tolerance,
-                     "... and the rotation less than this (rotation angle, rad). Default 1e-5.")
-      .def_readwrite("initial_damping", &BatchSettings::initial_damping,
-                     "Initial Levenberg-Marquardt damping, relative to the mean diagonal of "
-                     "J^T J; 0 = plain Gauss-Newton; unused by point-to-point. Default 1e-6.")
+      "");
+  def_distance(batch, "kernel_scale", &BatchSettings::kernel_scale, "");
+  batch.def_readwrite("trim_ratio", &BatchSettings::trim_ratio, "");
+  def_count(batch, "max_iterations", &BatchSettings::max_iterations, "");
+  batch.def_readwrite("translation_tolerance", &BatchSettings::translation_tolerance, "")
+      .def_readwrite("rotation_tolerance", &BatchSettings::rotation_tolerance, "")
+      .def_readwrite("initial_damping", &BatchSettings::initial_damping, "")
       .def_readwrite("neighborhood", &BatchSettings::neighborhood,
                      "NeighborhoodSettings for the normals and covariances of the plane costs.");
-  def_count(
-      batch, "evaluation_points", &BatchSettings::evaluation_points,
-      "Source points (spread evenly) for the final inlier statistics; 0 = all. Default 2000.");
-  def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy,
-           "Check the final alignment for degenerate geometry and report it in "
-           "RegistrationResult.constraint_ratio / degenerate. Default True.");
-  def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling,
-           "Scale (of the scaled distances and tolerances) from the bulk of each cloud, not "
-           "hostage to a few far points. Default True.");
-  def_count(batch, "num_threads", &BatchSettings::num_threads,
-            "Threads of one registration (its KD-tree build); 0 = every core. Default 1.");
-  def_voxel_grid(batch, SGDICP_VOXEL_SIZE_DOC,
-                 SGDICP_DOWNSAMPLE_TO_DOC " Default 0 (the batch baselines use every point).");
-  def_flag(batch, "record_trace", &BatchSettings::record_trace,
-           "Fill RegistrationResult.trace: one entry per iteration (pose, step size 1, d_max, "
-           "pairs, mean squared pair distance). Default False.");
+  def_count(batch, "evaluation_points", &BatchSettings::evaluation_points, "");
+  def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy, "");
+  def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling, "");
+  def_count(batch, "num_threads", &BatchSettings::num_threads, "");
+  def_voxel_grid(batch);
+  def_flag(batch, "record_trace", &BatchSettings::record_trace, "");
   def_value_methods(batch);
 }
 
