@@ -260,7 +260,7 @@ class VoxelSlots {
     const std::size_t mask = entries_.size() - 1;
     for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
       const Entry& e = entries_[i];
-      if (e.slot == kEmpty) return kNone;
+      if (e.slot == kNone) return kNone;
       if (e.key == key) return e.slot;
     }
   }
@@ -275,10 +275,9 @@ class VoxelSlots {
   }
 
  private:
-  static constexpr std::size_t kEmpty = kNone;
   struct Entry {
     VoxelKey key;
-    std::size_t slot = kEmpty;
+    std::size_t slot = kNone;
   };
 
   std::size_t find_or_add(const VoxelKey& key) {
@@ -286,7 +285,7 @@ class VoxelSlots {
     const std::size_t mask = entries_.size() - 1;
     for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
       Entry& e = entries_[i];
-      if (e.slot == kEmpty) {
+      if (e.slot == kNone) {
         e = {key, size_};
         return size_++;
       }
@@ -299,9 +298,9 @@ class VoxelSlots {
     old.swap(entries_);
     const std::size_t mask = capacity - 1;
     for (const Entry& e : old) {
-      if (e.slot == kEmpty) continue;
+      if (e.slot == kNone) continue;
       std::size_t i = hash_of(e.key) & mask;
-      while (entries_[i].slot != kEmpty) i = (i + 1) & mask;
+      while (entries_[i].slot != kNone) i = (i + 1) & mask;
       entries_[i] = e;
     }
   }
@@ -545,6 +544,23 @@ double search_voxel_size(const PointCloud& cloud, std::size_t target_points,
   return size;
 }
 
+// The grid a registration thins `cloud` with (registration_voxel_size); `settled` as for
+// search_voxel_size.
+double grid_size(const PointCloud& cloud, double voxel_size_m, std::size_t downsample_to,
+                 std::optional<CountedGrid>* settled) {
+  if (voxel_size_m > 0.0) return voxel_size_m;
+  if (cloud.has_normals() || cloud.has_covariances()) return 0.0;
+  return search_voxel_size(cloud, downsample_to, settled);
+}
+
+// accumulate_voxels, reusing the hashing of the search's settling pass when there is one.
+template <class Voxel>
+VoxelTable<Voxel> accumulate(const PointCloud& cloud, double voxel_size_m,
+                             std::optional<CountedGrid>& settled) {
+  return settled ? accumulate_counted<Voxel>(cloud, std::move(*settled))
+                 : accumulate_voxels<Voxel>(cloud, voxel_size_m);
+}
+
 // voxel_downsample_with_surfaces of an accumulated table; `stored` from in_stored_frame.
 PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Vector3d& origin_m,
                                const NeighborhoodSettings& stored, std::size_t threads) {
@@ -611,19 +627,14 @@ RegistrationGrid registration_grid(const PointCloud& cloud, double voxel_size_m,
                                    std::size_t downsample_to, const NeighborhoodSettings& settings,
                                    bool surfaces) {
   std::optional<CountedGrid> settled;
-  if (voxel_size_m <= 0.0) {
-    if (cloud.has_normals() || cloud.has_covariances()) return {};
-    voxel_size_m = downsample_to == 0 ? 0.0 : search_voxel_size(cloud, downsample_to, &settled);
-    if (voxel_size_m == 0.0) return {};
-  }
+  voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, &settled);
+  if (voxel_size_m == 0.0) return {};
   if (!surfaces) {
-    const auto table = settled ? accumulate_counted<Centroid>(cloud, std::move(*settled))
-                               : accumulate_voxels<Centroid>(cloud, voxel_size_m);
+    const auto table = accumulate<Centroid>(cloud, voxel_size_m, settled);
     return {centroids_of(table.voxels, cloud.origin_m), voxel_size_m};
   }
   check_neighborhood(settings);
-  const auto table = settled ? accumulate_counted<Moments>(cloud, std::move(*settled))
-                             : accumulate_voxels<Moments>(cloud, voxel_size_m);
+  const auto table = accumulate<Moments>(cloud, voxel_size_m, settled);
   // A 3x3 patch of voxels across a surface holds about 9 * (points per voxel): at least k of
   // them, or the centroids' own k nearest neighbours give the better estimate.
   if (9 * cloud.size() < settings.k * table.voxels.size()) {
@@ -685,9 +696,7 @@ double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) 
 
 double registration_voxel_size(const PointCloud& cloud, double voxel_size_m,
                                std::size_t downsample_to) {
-  if (voxel_size_m > 0.0) return voxel_size_m;
-  if (cloud.has_normals() || cloud.has_covariances()) return 0.0;
-  return voxel_size_for_count(cloud, downsample_to);
+  return grid_size(cloud, voxel_size_m, downsample_to, nullptr);
 }
 
 PointCloud random_downsample(const PointCloud& cloud, std::size_t count, std::uint64_t seed) {
