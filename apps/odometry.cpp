@@ -99,8 +99,13 @@ void write_report_csv(const std::string& path, const FrameSource& source,
   if (!out) throw IoError(path + ": write error");
 }
 
-// The ground truth as poses of the frames, relative to the first: checked against the frame
-// count, moved into the sensor frame by a KITTI calibration when given.
+// The timestamps of the first `frames` frames, or nothing when the source does not give them.
+std::vector<double> frame_times_s(const FrameSource& source, std::size_t frames) {
+  if (source.timestamps_s.size() < frames) return {};
+  return {source.timestamps_s.begin(),
+          source.timestamps_s.begin() + static_cast<std::ptrdiff_t>(frames)};
+}
+
 // The ground truth of the frames an evaluation compares: `frames[i]` is matched with `poses[i]`.
 struct GroundTruth {
   std::vector<std::size_t> frames;
@@ -128,14 +133,14 @@ GroundTruth associated_ground_truth(const OdometryOptions& o, const Trajectory& 
   return out;
 }
 
+// The ground truth as poses of the frames, relative to the first: matched by timestamp or
+// checked against the frame count, moved into the sensor frame by a KITTI calibration when given.
 GroundTruth load_ground_truth(const OdometryOptions& o, const FrameSource& source,
                               std::size_t frames) {
   Trajectory truth = read_trajectory(o.ground_truth);
   GroundTruth out;
-  if (!truth.timestamps_s.empty() && source.timestamps_s.size() >= frames) {
-    const std::vector<double> times(
-        source.timestamps_s.begin(),
-        source.timestamps_s.begin() + static_cast<std::ptrdiff_t>(frames));
+  const std::vector<double> times = frame_times_s(source, frames);
+  if (!truth.timestamps_s.empty() && !times.empty()) {
     out = associated_ground_truth(o, truth, times);
   } else {
     if (truth.poses.size() != frames) {
@@ -240,12 +245,8 @@ void run(const OdometryOptions& o) {
 
   write_kitti_poses(o.poses_out, odometry.poses());
   if (!o.tum.empty()) {
-    std::vector<double> times(
-        source.timestamps_s.begin(),
-        source.timestamps_s.begin() +
-            static_cast<std::ptrdiff_t>(std::min(frames, source.timestamps_s.size())));
-    if (times.size() != frames) {
-      times.clear();
+    std::vector<double> times = frame_times_s(source, frames);
+    if (times.empty()) {
       for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
     }
     write_tum_trajectory(o.tum, odometry.poses(), times);
