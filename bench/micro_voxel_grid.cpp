@@ -38,13 +38,25 @@ void size_search(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
   state.counters["voxel_m"] = size;
 }
 
+// The voxel size that keeps kTarget points, or 0 with the benchmark skipped when the cloud is
+// smaller than that.
+double grid_or_skip(benchmark::State& state, const PointCloud& cloud) {
+  const double size = sgdicp::voxel_size_for_count(cloud, kTarget);
+  if (size <= 0.0) state.SkipWithError("cloud smaller than the target: nothing to thin");
+  return size;
+}
+
+// Surfaces estimated on one thread, as a registration with the default num_threads = 1.
+const sgdicp::NeighborhoodSettings kOneThread = [] {
+  sgdicp::NeighborhoodSettings s;
+  s.num_threads = 1;
+  return s;
+}();
+
 void thinning(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
   const PointCloud& cloud = sgdicp::bench::cloud(ds.reference);
-  const double size = sgdicp::voxel_size_for_count(cloud, kTarget);
-  if (size <= 0.0) {
-    state.SkipWithError("cloud smaller than the target: nothing to thin");
-    return;
-  }
+  const double size = grid_or_skip(state, cloud);
+  if (size <= 0.0) return;
   std::size_t kept = 0;
   for (auto _ : state) {
     const PointCloud thinned = sgdicp::voxel_downsample(cloud, size);
@@ -59,15 +71,10 @@ void thinning(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
 // (voxel_downsample_with_surfaces) or from the k nearest centroids (estimate_normals over them).
 void thinning_with_block_surfaces(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
   const PointCloud& cloud = sgdicp::bench::cloud(ds.reference);
-  const double size = sgdicp::voxel_size_for_count(cloud, kTarget);
-  if (size <= 0.0) {
-    state.SkipWithError("cloud smaller than the target: nothing to thin");
-    return;
-  }
-  sgdicp::NeighborhoodSettings one_thread;
-  one_thread.num_threads = 1;
+  const double size = grid_or_skip(state, cloud);
+  if (size <= 0.0) return;
   for (auto _ : state) {
-    const PointCloud thinned = sgdicp::voxel_downsample_with_surfaces(cloud, size, one_thread);
+    const PointCloud thinned = sgdicp::voxel_downsample_with_surfaces(cloud, size, kOneThread);
     benchmark::DoNotOptimize(thinned.normals.data());
   }
   per_input_point(state, cloud);
@@ -75,16 +82,11 @@ void thinning_with_block_surfaces(benchmark::State& state, const sgdicp::bench::
 
 void thinning_with_nearest_normals(benchmark::State& state, const sgdicp::bench::Dataset& ds) {
   const PointCloud& cloud = sgdicp::bench::cloud(ds.reference);
-  const double size = sgdicp::voxel_size_for_count(cloud, kTarget);
-  if (size <= 0.0) {
-    state.SkipWithError("cloud smaller than the target: nothing to thin");
-    return;
-  }
-  sgdicp::NeighborhoodSettings one_thread;
-  one_thread.num_threads = 1;
+  const double size = grid_or_skip(state, cloud);
+  if (size <= 0.0) return;
   for (auto _ : state) {
     PointCloud thinned = sgdicp::voxel_downsample(cloud, size);
-    sgdicp::estimate_normals(thinned, one_thread);
+    sgdicp::estimate_normals(thinned, kOneThread);
     benchmark::DoNotOptimize(thinned.normals.data());
   }
   per_input_point(state, cloud);
