@@ -215,10 +215,12 @@ Odometry::Odometry(const OdometrySettings& settings, std::string_view method,
       sgd_(sgd.value_or(SgdSettings{})),
       batch_(batch.value_or(BatchSettings{})) {
   settings_.validate();
-  if (!sgd && !batch) {
-    apply_method_cost(*method_, sgd_, batch_);
-  } else {
+  // The settings of the method's own solver decide: given, they are checked; not given, the
+  // defaults get the method's cost.
+  if (method_->solver == Solver::sgd ? sgd.has_value() : batch.has_value()) {
     check_method_cost(*method_, sgd_, batch_);
+  } else {
+    apply_method_cost(*method_, sgd_, batch_);
   }
   // The pipeline thins frames and map on its own voxel grid (settings_.voxel_size_m): the
   // registration step uses them as they are.

@@ -125,7 +125,8 @@ struct FrameReport {
 class Odometry {
  public:
   /// The registration step is `method` (methods.hpp) with `sgd` or `batch` as its settings.
-  /// Without either, the defaults with the method's cost (apply_method_cost); given settings are
+  /// Without the settings of the method's solver (`sgd` for the SGD methods, `batch` for the
+  /// batch ones), the defaults with the method's cost (apply_method_cost); given, they are
   /// used as they are (their grid aside: the pipeline has its own), so apply the method's cost to
   /// them before changing what you want (e.g. a coarse cost). Throws InvalidSettingsError for
   /// invalid settings or method, or settings whose cost is not the method's.
