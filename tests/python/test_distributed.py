@@ -169,3 +169,49 @@ def test_missing_reference_is_reported_in_its_row(pairs_file, client):
                            (good.source, good.reference)], client, seed=7)
     assert not rows[0].ok and rows[0].error.startswith("IoError") and "missing.ply" in rows[0].error
     assert rows[1].ok
+
+
+def test_lost_worker_is_retried(pairs_file):
+    """A worker killed (SIGKILL) while it registers a pair: Dask runs its task again on a worker
+    that is alive, and every row still comes back, in order, equal to the sequential result."""
+    import os
+    import signal
+    import threading
+    import time
+
+    # Slow pairs (300 full ICP iterations each, no early stop) so that the kill lands mid-task.
+    slow = {"max_iterations": 300, "translation_tolerance": 0.0, "rotation_tolerance": 0.0}
+    good = [j for j in read_jobs(pairs_file) if "bad" not in j.source]
+    pairs = [(j.source, j.reference) for j in good] * 2
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    client = distributed.Client(cluster)
+    try:
+        out = {}
+        runner = threading.Thread(
+            target=lambda: out.update(rows=register_pairs(pairs, client, "icp", **slow)))
+        runner.start()
+        victim, deadline = None, time.monotonic() + 60
+        while victim is None and time.monotonic() < deadline:
+            busy = [w for w, keys in client.processing().items() if keys]
+            victim = busy[0] if busy else None
+            time.sleep(0.05)
+        assert victim is not None, "no task started"
+        time.sleep(0.2)  # inside the task, not at its start
+        pid = client.run(os.getpid, workers=[victim])[victim]
+        os.kill(pid, signal.SIGKILL)
+        runner.join(timeout=240)
+        assert not runner.is_alive(), "register_pairs did not return after the worker was lost"
+    finally:
+        client.close()
+        cluster.close()
+    rows = out["rows"]
+    assert [r.index for r in rows] == list(range(len(pairs)))
+    assert all(r.ok for r in rows), [r.error for r in rows]
+    # The task that was running on the victim finished elsewhere: not every row names the victim,
+    # and the victim's rows are only those done before the kill.
+    assert any(r.worker != victim for r in rows)
+    for row, (source, reference) in zip(rows, pairs):
+        expected = sgd_icp.register(sgd_icp.read_points(source), sgd_icp.read_points(reference),
+                                    method="icp", **slow)
+        np.testing.assert_array_equal(row.T_reference_source, expected.T_reference_source)

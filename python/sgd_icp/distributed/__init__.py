@@ -200,7 +200,9 @@ def register_pairs(
     (source, reference[, init]) paths. client: a dask.distributed.Client (None: a LocalCluster on
     this machine, one single-threaded worker per core, closed at the end). method and **settings:
     those of sgd_icp.register (settings= a Settings or BatchSettings, and the keyword overrides,
-    seed= among them). retries: how often Dask runs a task again whose worker was lost.
+    seed= among them). retries: how often Dask runs a task again that raised an error the library
+    does not report in its row (a task whose worker is lost is rescheduled by the scheduler itself,
+    up to its distributed.scheduler.allowed-failures).
     cache_size: reference indexes each worker keeps. progress: show dask's progress bar.
 
     Paths travel to the workers, which must see the files under the same names (a shared file

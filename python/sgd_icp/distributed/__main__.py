@@ -44,7 +44,8 @@ def parse_args(argv):
     p.add_argument("--seed", type=int, default=None, help="random seed of the SGD methods "
                    "(default: the library's)")
     p.add_argument("--retries", type=int, default=2,
-                   help="times a task is run again when its worker is lost (default: 2)")
+                   help="times a task that raised an unexpected error is run again (default: 2); a "
+                   "task whose worker is lost is rescheduled by Dask's scheduler anyway")
     p.add_argument("--csv", metavar="FILE", help="write one CSV row per pair to FILE")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
