@@ -410,7 +410,8 @@ void run(const BenchOptions& o) {
     if (m.stochastic) {
       label += ", " + o.settings.preset + " settings, optimizer " +
                std::string(to_string(m.sgd.optimizer.type)) +
-               ", m = " + std::to_string(m.sgd.batch_size);
+               ", m = " + std::to_string(m.sgd.batch_size) +
+               (m.sgd.cap_batch_to_source ? " (capped for small sources)" : "");
     }
     print_summary(label, mine, thresholds);
   }

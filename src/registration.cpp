@@ -304,15 +304,20 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       settings.refinement.stages > 0 && needs_covariances(settings.coarse_cost)
           ? settings.coarse_cost
           : settings.cost;
-  const detail::PreparedSource src(source, voxel_m, frame.origin_m(), source_needs,
-                                   settings.neighborhood, settings.batch_size,
-                                   "the mini-batch size", detail::SurfaceEstimation::lazy);
+  const detail::PreparedSource src(
+      source, voxel_m, frame.origin_m(), source_needs, settings.neighborhood,
+      min_source_points(settings),
+      settings.cap_batch_to_source ? "the smallest mini-batch" : "the mini-batch size",
+      detail::SurfaceEstimation::lazy);
+  // The run's own copy: m capped for a small source (cap_batch_to_source).
+  SgdSettings run_settings = settings;
+  run_settings.batch_size = batch_size_for(settings, src.cloud().size());
   RegistrationResult result;
   detail::record_clouds(result, src.cloud(), voxel_m, reference);
   const UnitCubeScaling scaling = detail::scaling_of(
       src.cloud(), reference, settings.scaling_origin, settings.robust_scaling, result);
   result.scale_m = scaling.scale();
-  SgdRun run(src.cloud(), src.index(), reference, settings, scaling);
+  SgdRun run(src.cloud(), src.index(), reference, run_settings, scaling);
   // Matrices read from text carry few digits: project onto the nearest rotation.
   const PoseVector theta_init =
       pose_from_transform(scaling.to_scaled(frame.to_stored(orthonormalized(T_init))));
@@ -334,7 +339,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
         run.max_distance(),
         scaling.scale(),
         settings.cost,
-        settings.batch_size,
+        run_settings.batch_size,
         settings.seed,
         theta_init};
     theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);

@@ -2,6 +2,7 @@
 
 #include "sgdicp/threads.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -17,6 +18,7 @@ namespace sgdicp {
 SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   SgdSettings s;
   s.batch_size = 160;
+  s.cap_batch_to_source = false;
   s.max_correspondence_distance = Distance::scaled(0.5);
   s.optimizer.type = optimizer;
   // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
@@ -31,6 +33,18 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   s.cost = s.coarse_cost = CostType::point_to_point;
   s.downsample_to = 0;
   return s;
+}
+
+std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_points) {
+  if (!settings.cap_batch_to_source) return settings.batch_size;
+  const std::size_t window = std::max<std::size_t>(settings.convergence.window, 1);
+  const std::size_t twice_per_window = (2 * source_points + window - 1) / window;
+  return std::min(settings.batch_size, std::max(kMinCappedBatch, twice_per_window));
+}
+
+std::size_t min_source_points(const SgdSettings& settings) {
+  return settings.cap_batch_to_source ? std::min(settings.batch_size, kMinCappedBatch)
+                                      : settings.batch_size;
 }
 
 BatchSettings BatchSettings::icp() {
@@ -331,6 +345,13 @@ std::vector<Setting<S>> step_settings() {
                                   {1.0, 1e7},
                                   "",
                                   "Mini-batch size m, source points per iteration"}),
+      setting<S, &S::cap_batch_to_source>(
+          {"cap-batch-to-source",
+           "cap_batch_to_source",
+           {},
+           "",
+           "Small sources: cap m at 2 x source points / window (at least 32) so that a "
+           "convergence window sees each point about twice (false: m always, the paper)"}),
       setting<S, &S::max_correspondence_distance>(
           {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
       setting<S, &S::max_iterations>(

@@ -503,8 +503,10 @@ assert d["source_points"] == 361, d["source_points"]
     register "$BUNNY_SRC" "$BUNNY_REF" --init "$IDENTITY12" --max-iterations 50
   expect_ok "--init with a file written by --output" \
     register "$BUNNY_SRC" "$BUNNY_REF" --init "$tmp/bunny_T.txt" --max-iterations 50
-  expect_error "bunny with --batch-size 1000 > 361 points" 'fewer|batch' \
+  expect_ok "bunny with --batch-size 1000 > 361 points: capped to the source" \
     register "$BUNNY_SRC" "$BUNNY_REF" --batch-size 1000
+  expect_error "bunny with --batch-size 1000 > 361 points, uncapped" 'fewer|batch' \
+    register "$BUNNY_SRC" "$BUNNY_REF" --batch-size 1000 --cap-batch-to-source false
 
   # bench
   run bench "$BUNNY_PAIRS" --csv "$tmp/bench.csv"

@@ -235,12 +235,22 @@ TEST(BadInput, EmptyTooSmallAndNonFiniteCloudsThrow) {
   EXPECT_THROW((void)align(PointCloud{}, good), InvalidInputError);
   EXPECT_THROW((void)align(good, PointCloud{}), InvalidInputError);
   PointCloud small;
-  small.points.assign(100, Eigen::Vector3f(1, 2, 3));
+  small.points.assign(20, Eigen::Vector3f(1, 2, 3));
   try {
     (void)align(small, good);
     FAIL() << "expected InvalidInputError";
   } catch (const InvalidInputError& e) {
-    EXPECT_NE(std::string(e.what()).find("fewer than the mini-batch size"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("fewer than the smallest mini-batch 32"),
+              std::string::npos)
+        << e.what();
+  }
+  small.points.assign(100, Eigen::Vector3f(1, 2, 3));
+  try {
+    (void)align(small, good, SgdSettings::paper());
+    FAIL() << "expected InvalidInputError";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fewer than the mini-batch size 160"), std::string::npos)
+        << e.what();
   }
   PointCloud nan_source = good;
   nan_source.points[5].x() = std::numeric_limits<float>::quiet_NaN();
@@ -397,6 +407,33 @@ TEST(RealData, KittiConsecutiveScans) {
   EXPECT_TRUE(run.result.converged);
   EXPECT_LT(run.t_err, 0.05);
   EXPECT_LT(run.r_err_deg, 0.2);
+}
+
+// A small source caps the mini-batch at 2 x points / window (at least 32): the window still sees
+// every point about twice, and the run finds the same pose with a quarter of the pairs.
+TEST(SmallSource, CapsTheMiniBatch) {
+  SgdSettings s;
+  EXPECT_EQ(batch_size_for(s, 361), 37u);  // ceil(2 * 361 / 20)
+  EXPECT_EQ(batch_size_for(s, 100), kMinCappedBatch);
+  EXPECT_EQ(batch_size_for(s, 1600), 160u);
+  EXPECT_EQ(batch_size_for(s, 100000), 160u);
+  EXPECT_EQ(batch_size_for(SgdSettings::paper(), 361), 160u);
+  EXPECT_EQ(min_source_points(s), kMinCappedBatch);
+  EXPECT_EQ(min_source_points(SgdSettings::paper()), 160u);
+
+  const Eigen::Matrix4d T_gt = make_transform(3 * kDeg, -2 * kDeg, 10 * kDeg, {0.1, -0.05, 0.05});
+  const PointCloud reference = synthetic_scene(51, 4000);
+  const PointCloud source = transformed(synthetic_scene(52, 400), T_gt.inverse());
+  SgdSettings uncapped;
+  uncapped.cap_batch_to_source = false;
+  const RegistrationResult capped = align(source, reference, s);
+  const RegistrationResult full = align(source, reference, uncapped);
+  EXPECT_EQ(capped.points_processed, capped.iterations * 40);
+  EXPECT_EQ(full.points_processed, full.iterations * 160);
+  EXPECT_TRUE(capped.converged) << capped.message;
+  EXPECT_LT(translation_error(capped.T_reference_source, T_gt), 0.02);
+  EXPECT_LT(rotation_error_geodesic(capped.T_reference_source, T_gt), 1.0 * kDeg);
+  EXPECT_LT(capped.points_processed, full.points_processed / 2);
 }
 
 }  // namespace

@@ -356,6 +356,11 @@ class Settings:
     """Mini-batch size m, source points per iteration, in [1, 10000000]. Keyword batch_size=.
     Default 160.
     """
+    cap_batch_to_source: bool
+    """Small sources: cap m at 2 x source points / window (at least 32) so that a convergence window
+    sees each point about twice (false: m always, the paper). Keyword cap_batch_to_source=.
+    Default True.
+    """
     max_correspondence_distance: Distance
     """Correspondence rejection distance d_max, a Distance in [1e-06, 10] scaled units or [1e-06,
     1000000] m. Keyword max_distance=. Default Distance.scaled(0.5).
@@ -445,6 +450,7 @@ class Settings:
         self,
         *,
         batch_size: int = ...,
+        cap_batch_to_source: bool = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         max_distance: _DistanceValue = ...,
@@ -498,6 +504,7 @@ class Settings:
         optimizer: _OptimizerName = "sgd",
         *,
         batch_size: int = ...,
+        cap_batch_to_source: bool = ...,
         learning_rate: float = ...,
         max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
@@ -552,6 +559,7 @@ class Settings:
         self,
         *,
         batch_size: int = ...,
+        cap_batch_to_source: bool = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         max_distance: _DistanceValue = ...,
@@ -977,6 +985,7 @@ def register(
     method: _MethodName = "sgd",
     *,
     batch_size: int = ...,
+    cap_batch_to_source: bool = ...,
     optimizer: _OptimizerName = ...,
     learning_rate: float = ...,
     max_distance: _DistanceValue = ...,
@@ -1065,11 +1074,12 @@ def register(
         downsample_to (0, [0, 4294967295]), robust_scaling (True), record_trace (False).
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
-        batch_size (160, [1, 10000000]), max_distance (Distance.scaled(0.5)),
-        max_iterations (4000, [1, 1000000000]), seed (2019, [0, 2^64-1]), momentum (0.9, [0, 1)),
-        beta1 (0.9, [0, 1)), beta2 (0.999, [0, 1)), rms_decay (0.9, [0, 1)),
-        epsilon (1e-08, (0, 1]), hessian_decay (0.9, [0, 1)), damping (0.001, [0, 100]),
-        window (20, [8, 100000]), chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
+        batch_size (160, [1, 10000000]), cap_batch_to_source (True),
+        max_distance (Distance.scaled(0.5)), max_iterations (4000, [1, 1000000000]),
+        seed (2019, [0, 2^64-1]), momentum (0.9, [0, 1)), beta1 (0.9, [0, 1)),
+        beta2 (0.999, [0, 1)), rms_decay (0.9, [0, 1)), epsilon (1e-08, (0, 1]),
+        hessian_decay (0.9, [0, 1)), damping (0.001, [0, 100]), window (20, [8, 100000]),
+        chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
         translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]),
         refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
         min_distance (Distance.scaled(0.0001)), refine_gauss_newton (True), average (True),

@@ -263,16 +263,18 @@ std::string kernel_name(KernelType t) {
 
 std::string repr(const SgdSettings& s) {
   return py::str(
-             "Settings(batch_size={!r}, max_correspondence_distance={}, optimizer={}, "
+             "Settings(batch_size={!r}, cap_batch_to_source={!r}, max_correspondence_distance={}, "
+             "optimizer={}, "
              "convergence={}, refinement={}, cost=CostType.{}, coarse_cost=CostType.{}, "
              "kernel=KernelType.{}, "
              "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
              "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
              "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r}, "
              "voxel_size_m={!r}, downsample_to={!r}, uncertainty={})")
-      .format(s.batch_size, repr(s.max_correspondence_distance), repr(s.optimizer),
-              repr(s.convergence), repr(s.refinement), cost_name(s.cost), cost_name(s.coarse_cost),
-              kernel_name(s.kernel), repr(s.kernel_scale), s.trim_ratio, repr(s.neighborhood),
+      .format(s.batch_size, s.cap_batch_to_source, repr(s.max_correspondence_distance),
+              repr(s.optimizer), repr(s.convergence), repr(s.refinement), cost_name(s.cost),
+              cost_name(s.coarse_cost), kernel_name(s.kernel), repr(s.kernel_scale), s.trim_ratio,
+              repr(s.neighborhood),
               s.scaling_origin == ScalingOrigin::center ? "center" : "lower_corner",
               s.max_iterations, s.seed, s.average_iterates, s.evaluation_points, s.record_trace,
               s.check_degeneracy, s.robust_scaling, s.num_threads, s.voxel_size_m, s.downsample_to,
@@ -650,6 +652,7 @@ void bind_sgd_settings(py::module_& m) {
           "validate", [](const SgdSettings& s) { s.validate(); },
           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.");
   def_count(settings, "batch_size", &SgdSettings::batch_size, "");
+  def_flag(settings, "cap_batch_to_source", &SgdSettings::cap_batch_to_source, "");
   def_distance(settings, "max_correspondence_distance", &SgdSettings::max_correspondence_distance,
                "");
   settings

@@ -63,8 +63,10 @@ def test_non_finite_rows_are_dropped_and_counted():
 
 
 def test_fewer_source_points_than_a_batch_raise_value_error():
+    with pytest.raises(ValueError, match="fewer than the smallest mini-batch 32"):
+        sgd_icp.register(GOOD[:20], GOOD)
     with pytest.raises(ValueError, match="fewer than the mini-batch size 160"):
-        sgd_icp.register(GOOD[:100], GOOD)
+        sgd_icp.register(GOOD[:100], GOOD, cap_batch_to_source=False)
 
 
 @pytest.mark.parametrize(
