@@ -171,6 +171,15 @@ Eigen::Matrix4d parse_transform_option(const std::string& text, const std::strin
   }
 }
 
+void check_picture_name(const std::string& path) {
+  std::string extension = std::filesystem::path(path).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".png") {
+    throw InvalidSettingsError("--picture " + path +
+                               ": the picture is written as PNG, give it a .png name");
+  }
+}
+
 nlohmann::json matrix_to_json(const Eigen::Matrix4d& T) {
   nlohmann::json rows = nlohmann::json::array();
   for (int r = 0; r < 4; ++r) {

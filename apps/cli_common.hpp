@@ -34,6 +34,9 @@ PointCloud load_cloud(const std::string& path, const std::string& role, bool ver
 /// 12/16 numbers inline. Errors name the option.
 Eigen::Matrix4d parse_transform_option(const std::string& text, const std::string& option);
 
+/// --picture is always PNG: a name that says otherwise is refused before any work is done.
+void check_picture_name(const std::string& path);
+
 nlohmann::json matrix_to_json(const Eigen::Matrix4d& T);
 
 /// Every field of a result (but the trace) as JSON.

@@ -16,6 +16,7 @@
 #include "sgdicp/error.hpp"
 #include "sgdicp/frame_source.hpp"
 #include "sgdicp/odometry.hpp"
+#include "sgdicp/render.hpp"
 #include "sgdicp/trajectory_io.hpp"
 #include "sgdicp/trajectory_metrics.hpp"
 
@@ -28,6 +29,7 @@ struct OdometryOptions {
   std::string tum;
   std::string ground_truth;
   std::string ground_truth_calib;
+  std::string picture;
   std::string report;
   bool ground_truth_prefix = false;
   double rate_hz = 0.0;
@@ -166,8 +168,10 @@ GroundTruth load_ground_truth(const OdometryOptions& o, const FrameSource& sourc
   return out;
 }
 
-void print_evaluation(const std::vector<Eigen::Matrix4d>& estimate,
-                      const std::vector<Eigen::Matrix4d>& truth) {
+// Prints the errors against the ground truth; returns the absolute trajectory error (its
+// alignment places the estimate in the picture).
+AbsoluteTrajectoryError print_evaluation(const std::vector<Eigen::Matrix4d>& estimate,
+                                         const std::vector<Eigen::Matrix4d>& truth) {
   std::cout << std::setprecision(4);
   const double length = path_length_m(truth);
   std::cout << "ground truth: " << truth.size() << " poses, path " << length << " m\n";
@@ -194,11 +198,13 @@ void print_evaluation(const std::vector<Eigen::Matrix4d>& estimate,
   const EndDrift end = end_drift(estimate, truth);
   std::cout << "end drift (first to last frame): " << end.translation_m << " m ("
             << end.translation_percent << " % of the path), " << end.rotation_deg << " deg\n";
+  return ate;
 }
 
 void run(const OdometryOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   const OdometrySettings settings = odometry_settings(o);
+  if (!o.picture.empty()) check_picture_name(o.picture);
   if (!(o.rate_hz >= 0.0 && std::isfinite(o.rate_hz))) {
     throw InvalidSettingsError("--rate " + format_number(o.rate_hz) + ": must be positive");
   }
@@ -273,8 +279,14 @@ void run(const OdometryOptions& o) {
   if (truth) {
     std::vector<Eigen::Matrix4d> compared;
     for (const std::size_t k : truth->frames) compared.push_back(odometry.poses()[k]);
-    print_evaluation(compared, truth->poses);
+    const AbsoluteTrajectoryError ate = print_evaluation(compared, truth->poses);
+    if (!o.picture.empty()) {
+      render_trajectories_png(o.picture, compared, truth->poses, ate.T_truth_estimate);
+    }
+  } else if (!o.picture.empty()) {
+    render_trajectories_png(o.picture, odometry.poses(), {}, Eigen::Matrix4d::Identity());
   }
+  if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
 }
 
 }  // namespace
@@ -316,6 +328,10 @@ void add_odometry_command(CLI::App& app) {
   cmd->add_option("--ground-truth-calib", o->ground_truth_calib,
                   "KITTI calib.txt: the ground truth is of the camera, moved to the scanner with "
                   "its Tr (velodyne to camera)");
+  cmd->add_option("--picture", o->picture,
+                  "Write a PNG (the name must end in .png) of the trajectory, seen along z (x-y) "
+                  "and along y (x-z), with the ground truth when given (the estimate aligned "
+                  "onto it as for the ATE)");
   cmd->add_option("--report", o->report,
                   "Write one CSV row per frame (failed, converged, iterations, points, inliers, "
                   "threshold, times, message)");

@@ -75,16 +75,6 @@ void print_uncertainty(const RegistrationResult& r) {
             << " ms)\n";
 }
 
-// The picture is always PNG: a name that says otherwise is refused before any work is done.
-void check_picture_name(const std::string& path) {
-  std::string extension = std::filesystem::path(path).extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (extension != ".png") {
-    throw InvalidSettingsError("--picture " + path +
-                               ": the picture is written as PNG, give it a .png name");
-  }
-}
-
 void run(const RegisterOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   if (!o.picture.empty()) check_picture_name(o.picture);

@@ -69,6 +69,7 @@ constexpr std::array kFont{
     Glyph{'e', "..... ..... .###. #...# ##### #.... .###. ..... ....."},
     Glyph{'f', "..##. .#... ####. .#... .#... .#... .#... ..... ....."},
     Glyph{'g', "..... ..... .#### #...# #...# #...# .#### ....# .###."},
+    Glyph{'h', "#.... #.... #.##. ##..# #...# #...# #...# ..... ....."},
     Glyph{'i', "..#.. ..... .##.. ..#.. ..#.. ..#.. .###. ..... ....."},
     Glyph{'l', ".##.. ..#.. ..#.. ..#.. ..#.. ..#.. .###. ..... ....."},
     Glyph{'m', "..... ..... ##.#. #.#.# #.#.# #.#.# #.#.# ..... ....."},
@@ -310,11 +311,7 @@ void draw_dots(Image& image, const Rect& clip, const Projection& projection,
   }
 }
 
-}  // namespace
-
-void render_alignment_png(const std::filesystem::path& path, const PointCloud& reference,
-                          const PointCloud& source, const Eigen::Matrix4d& T_reference_source,
-                          const RenderSettings& settings) {
+void check_render_settings(const RenderSettings& settings) {
   const auto check_size = [](const int value, const char* name) {
     if (value < kMinSize || value > kMaxSize) {
       throw InvalidSettingsError("render " + std::string(name) + " must be in [" +
@@ -327,37 +324,73 @@ void render_alignment_png(const std::filesystem::path& path, const PointCloud& r
   if (settings.max_points == 0) {
     throw InvalidSettingsError("render max_points must be at least 1");
   }
-  if (reference.empty()) throw InvalidInputError("cannot render: the reference cloud is empty");
-  if (source.empty()) throw InvalidInputError("cannot render: the source cloud is empty");
-  if (!T_reference_source.allFinite()) {
-    throw InvalidInputError("cannot render: the transform has a non-finite entry");
-  }
+}
 
-  // The dots to draw (strided clouds) in the reference frame, and the box of all points.
-  const RigidMap move_source(
-      between_stored(T_reference_source, source.origin_m, reference.origin_m));
-  BoundingBox box;
-  std::vector<Dot> dots;
-  const auto collect = [&](const PointCloud& cloud, const Rgb colour, const auto& to_reference) {
-    const std::size_t stride = stride_for(cloud.size(), settings.max_points);
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      if (!cloud.points[i].allFinite()) continue;
-      const Eigen::Vector3d p = to_reference(cloud.points[i]);
-      box.extend(p);
-      if (i % stride == 0) dots.push_back({p, colour});
+// Scale bar at the bottom right of `frame`: a round length of at most a quarter of a plot's
+// width, labelled; returns its left end.
+int draw_scale_bar(Image& image, const Rect& frame, const int footer_y, const double plot_width,
+                   const double pixels_per_metre, const int text_scale) {
+  const RoundLength bar_length = round_length_below(0.25 * plot_width / pixels_per_metre);
+  const int bar_pixels =
+      std::max(1, static_cast<int>(std::lround(bar_length.value * pixels_per_metre)));
+  const std::string bar_label = length_label(bar_length);
+  const int label_x = frame.x + frame.width - text_width(bar_label, text_scale);
+  image.text(label_x, footer_y, bar_label, text_scale, kTextColour);
+  const int bar_right = label_x - 3 * text_scale;
+  const int bar_left = bar_right - bar_pixels;
+  const int bar_y = footer_y + 3 * text_scale;  // middle of the digits
+  const int thickness = text_scale;
+  image.fill_rect({bar_left, bar_y, bar_pixels, thickness}, kTextColour);
+  for (const int x : {bar_left, bar_right - thickness}) {
+    image.fill_rect({x, bar_y - 2 * text_scale, thickness, 4 * text_scale + thickness},
+                    kTextColour);
+  }
+  return bar_left;
+}
+
+// Legend at the bottom left: a coloured square and the name of each entry with a name; the names
+// are left out when the picture is too narrow for them to fit beside the scale bar.
+void draw_legend(Image& image, const std::array<std::pair<Rgb, std::string_view>, 2>& legend,
+                 const int left, const int footer_y, const int bar_left, const int text_scale) {
+  const int square = 7 * text_scale;
+  const int square_gap = 4 * text_scale;
+  const int entry_gap = 16 * text_scale;
+  int legend_width = 0;
+  for (const auto& entry : legend) {
+    legend_width += square + square_gap + text_width(entry.second, text_scale) + entry_gap;
+  }
+  const bool with_names = left + legend_width <= bar_left;
+  int pen_x = left;
+  for (const auto& [colour, name] : legend) {
+    if (name.empty()) continue;
+    image.fill_rect({pen_x, footer_y, square, square}, colour);
+    pen_x += square + square_gap;
+    if (with_names) {
+      image.text(pen_x, footer_y, name, text_scale, kTextColour);
+      pen_x += text_width(name, text_scale) + entry_gap;
     }
-  };
-  dots.reserve(std::min(reference.size(), settings.max_points) +
-               std::min(source.size(), settings.max_points));
-  collect(reference, kReferenceColour,
-          [](const Eigen::Vector3f& p) -> Eigen::Vector3d { return p.cast<double>(); });
-  collect(source, kSourceColour, move_source);
-  if (!box.valid() || !box.min.allFinite() || !box.max.allFinite()) {
-    throw InvalidInputError("cannot render: the clouds have no finite points");
   }
-  mix_drawing_order(dots);
+}
 
-  // Layout: a title row at the top, two panels side by side, a footer with legend and scale bar.
+/// What one picture shows: dots of up to two colours in one frame, the box they span (which may
+/// hold points not drawn), the two views' titles and the legend (colour, name).
+struct Scene {
+  std::vector<Dot> dots;
+  BoundingBox box;
+  std::array<std::string_view, 2> titles;
+  std::array<std::pair<Rgb, std::string_view>, 2> legend;
+};
+
+// Two panels side by side, x-y (left) and x-z (right), sharing one metric scale, under a title
+// row and above a footer with the legend and a scale bar.
+void write_views_png(const std::filesystem::path& path, Scene scene,
+                     const RenderSettings& settings) {
+  const BoundingBox& box = scene.box;
+  if (!box.valid() || !box.min.allFinite() || !box.max.allFinite()) {
+    throw InvalidInputError("cannot render: no finite points");
+  }
+  mix_drawing_order(scene.dots);
+
   const int width = settings.width;
   const int height = settings.height;
   Image image(width, height);
@@ -383,7 +416,7 @@ void render_alignment_png(const std::filesystem::path& path, const PointCloud& r
   // One scale for both views: the x extent must fit the plot width, y and z its height.
   const Eigen::Vector3d span = box.max - box.min;
   if (!span.allFinite()) {
-    throw InvalidInputError("cannot render: the clouds extend too far to be drawn");
+    throw InvalidInputError("cannot render: the points extend too far to be drawn");
   }
   double pixels_per_metre = std::numeric_limits<double>::infinity();
   if (span.x() > 0.0) pixels_per_metre = std::min(pixels_per_metre, plot_width / span.x());
@@ -393,7 +426,6 @@ void render_alignment_png(const std::filesystem::path& path, const PointCloud& r
     pixels_per_metre = std::min(plot_width, plot_height);  // a single point: show 1 m
   }
 
-  constexpr std::array<std::string_view, 2> titles{"top view x-y", "side view x-z"};
   constexpr double alpha = 0.55;  // dense regions saturate, sparse ones stay light
   for (std::size_t i = 0; i < 2; ++i) {
     const Rect& frame = frames[i];
@@ -411,59 +443,112 @@ void render_alignment_png(const std::filesystem::path& path, const PointCloud& r
     projection.origin_y = frame.y + 0.5 * (frame.height + content_height);
 
     image.outline_rect(frame, kFrameColour);
-    if (text_width(titles[i], text_scale) <= frame.width) {
-      image.text(frame.x, pad, titles[i], text_scale, kTextColour);
+    if (text_width(scene.titles[i], text_scale) <= frame.width) {
+      image.text(frame.x, pad, scene.titles[i], text_scale, kTextColour);
     }
     const Rect inside{frame.x + 1, frame.y + 1, frame.width - 2, frame.height - 2};
-    draw_dots(image, inside, projection, dots, dot_size, alpha);
+    draw_dots(image, inside, projection, scene.dots, dot_size, alpha);
   }
 
-  // Scale bar, bottom right: a round length of at most a quarter of a plot's width.
   const int footer_y = height - footer + pad;
-  const RoundLength bar_length = round_length_below(0.25 * plot_width / pixels_per_metre);
-  const int bar_pixels =
-      std::max(1, static_cast<int>(std::lround(bar_length.value * pixels_per_metre)));
-  const std::string bar_label = length_label(bar_length);
-  const int label_x = frames[1].x + frames[1].width - text_width(bar_label, text_scale);
-  image.text(label_x, footer_y, bar_label, text_scale, kTextColour);
-  const int bar_right = label_x - 3 * text_scale;
-  const int bar_left = bar_right - bar_pixels;
-  const int bar_y = footer_y + 3 * text_scale;  // middle of the digits
-  const int thickness = text_scale;
-  image.fill_rect({bar_left, bar_y, bar_pixels, thickness}, kTextColour);
-  for (const int x : {bar_left, bar_right - thickness}) {
-    image.fill_rect({x, bar_y - 2 * text_scale, thickness, 4 * text_scale + thickness},
-                    kTextColour);
-  }
-
-  // Legend, bottom left: a coloured square and the name of each cloud; the names are left out
-  // when the picture is too narrow for them to fit beside the scale bar.
-  constexpr std::array<std::pair<Rgb, std::string_view>, 2> legend{
-      std::pair{kReferenceColour, std::string_view("reference")},
-      std::pair{kSourceColour, std::string_view("source (aligned)")}};
-  const int square = 7 * text_scale;
-  const int square_gap = 4 * text_scale;
-  const int entry_gap = 4 * pad;
-  int legend_width = 0;
-  for (const auto& entry : legend) {
-    legend_width += square + square_gap + text_width(entry.second, text_scale) + entry_gap;
-  }
-  const bool with_names = frames[0].x + legend_width <= bar_left;
-  int pen_x = frames[0].x;
-  for (const auto& [colour, name] : legend) {
-    image.fill_rect({pen_x, footer_y, square, square}, colour);
-    pen_x += square + square_gap;
-    if (with_names) {
-      image.text(pen_x, footer_y, name, text_scale, kTextColour);
-      pen_x += text_width(name, text_scale) + entry_gap;
-    }
-  }
+  const int bar_left =
+      draw_scale_bar(image, frames[1], footer_y, plot_width, pixels_per_metre, text_scale);
+  draw_legend(image, scene.legend, frames[0].x, footer_y, bar_left, text_scale);
 
   const std::string filename = path.string();
   if (stbi_write_png(filename.c_str(), image.width(), image.height(), 3, image.data(),
                      image.width() * 3) == 0) {
     throw IoError("cannot write PNG '" + filename + "'");
   }
+}
+
+// Dots every `spacing` metres along the polyline through the positions of `poses` (in the frame
+// `to_frame` maps them into), so that the path draws as a line.
+void add_path(const std::vector<Eigen::Matrix4d>& poses, const Eigen::Matrix4d& to_frame,
+              const double spacing_m, const Rgb colour, Scene& scene) {
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const Eigen::Vector3d p = (to_frame * poses[k]).topRightCorner<3, 1>();
+    scene.box.extend(p);
+    const double length = k == 0 ? 0.0 : (p - previous).norm();
+    const auto steps = static_cast<std::size_t>(std::ceil(length / spacing_m));
+    for (std::size_t s = 1; s <= steps; ++s) {
+      const double f = static_cast<double>(s) / static_cast<double>(steps);
+      scene.dots.push_back({previous + f * (p - previous), colour});
+    }
+    if (k == 0) scene.dots.push_back({p, colour});
+    previous = p;
+  }
+}
+
+[[nodiscard]] double path_length(const std::vector<Eigen::Matrix4d>& poses) {
+  double length = 0.0;
+  for (std::size_t k = 1; k < poses.size(); ++k) {
+    length += (poses[k].topRightCorner<3, 1>() - poses[k - 1].topRightCorner<3, 1>()).norm();
+  }
+  return length;
+}
+
+}  // namespace
+
+void render_alignment_png(const std::filesystem::path& path, const PointCloud& reference,
+                          const PointCloud& source, const Eigen::Matrix4d& T_reference_source,
+                          const RenderSettings& settings) {
+  check_render_settings(settings);
+  if (reference.empty()) throw InvalidInputError("cannot render: the reference cloud is empty");
+  if (source.empty()) throw InvalidInputError("cannot render: the source cloud is empty");
+  if (!T_reference_source.allFinite()) {
+    throw InvalidInputError("cannot render: the transform has a non-finite entry");
+  }
+  // The dots to draw (strided clouds) in the reference frame, and the box of all points.
+  const RigidMap move_source(
+      between_stored(T_reference_source, source.origin_m, reference.origin_m));
+  Scene scene{{},
+              {},
+              {"top view x-y", "side view x-z"},
+              {std::pair{kReferenceColour, std::string_view("reference")},
+               std::pair{kSourceColour, std::string_view("source (aligned)")}}};
+  const auto collect = [&](const PointCloud& cloud, const Rgb colour, const auto& to_reference) {
+    const std::size_t stride = stride_for(cloud.size(), settings.max_points);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (!cloud.points[i].allFinite()) continue;
+      const Eigen::Vector3d p = to_reference(cloud.points[i]);
+      scene.box.extend(p);
+      if (i % stride == 0) scene.dots.push_back({p, colour});
+    }
+  };
+  scene.dots.reserve(std::min(reference.size(), settings.max_points) +
+                     std::min(source.size(), settings.max_points));
+  collect(reference, kReferenceColour,
+          [](const Eigen::Vector3f& p) -> Eigen::Vector3d { return p.cast<double>(); });
+  collect(source, kSourceColour, move_source);
+  write_views_png(path, std::move(scene), settings);
+}
+
+void render_trajectories_png(const std::filesystem::path& path,
+                             const std::vector<Eigen::Matrix4d>& estimate,
+                             const std::vector<Eigen::Matrix4d>& truth,
+                             const Eigen::Matrix4d& T_truth_estimate,
+                             const RenderSettings& settings) {
+  check_render_settings(settings);
+  if (estimate.empty()) throw InvalidInputError("cannot render: the trajectory is empty");
+  const auto finite = [](const std::vector<Eigen::Matrix4d>& poses) {
+    return std::all_of(poses.begin(), poses.end(), [](const auto& T) { return T.allFinite(); });
+  };
+  if (!finite(estimate) || !finite(truth) || !T_truth_estimate.allFinite()) {
+    throw InvalidInputError("cannot render: a pose has a non-finite entry");
+  }
+  // The longer path sets the dot spacing: max_points dots along it, at least one per ~mm.
+  const double length = std::max(path_length(estimate), path_length(truth));
+  const double spacing_m = std::max(length / static_cast<double>(settings.max_points), 1e-3);
+  Scene scene{{},
+              {},
+              {"view x-y", "view x-z"},
+              {std::pair{kReferenceColour, std::string_view(truth.empty() ? "" : "ground truth")},
+               std::pair{kSourceColour, std::string_view("estimate")}}};
+  add_path(truth, Eigen::Matrix4d::Identity(), spacing_m, kReferenceColour, scene);
+  add_path(estimate, T_truth_estimate, spacing_m, kSourceColour, scene);
+  write_views_png(path, std::move(scene), settings);
 }
 
 }  // namespace sgdicp

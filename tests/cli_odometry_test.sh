@@ -101,13 +101,24 @@ expect_error "odometry --ground-truth with another frame count" '2 poses for 4 f
   odometry "$seq" --poses-out "$tmp/m.txt" --ground-truth "$tmp/gt2.txt"
 for i in 0 1 2 3; do cp "$DEMO/car_cloud400.csv" "$seq/frame_$i.csv"; done
 for i in 0 1 2 3; do echo "1 0 0 0 0 1 0 0 0 0 1 0"; done >"$tmp/gt4.txt"
-run odometry "$seq" --poses-out "$tmp/m.txt" --ground-truth "$tmp/gt4.txt"
+run odometry "$seq" --poses-out "$tmp/m.txt" --ground-truth "$tmp/gt4.txt" --picture "$tmp/traj.png"
 if [ "$rc" -eq 0 ] && grep -q 'ATE (evo_ape' "$tmp/out" && grep -q 'KITTI drift: not computed' "$tmp/out" &&
   grep -q 'RPE per frame' "$tmp/out" && grep -q 'end drift' "$tmp/out"; then
   pass "odometry --ground-truth prints RPE, ATE and end drift, and says why there is no KITTI drift"
 else
   fail "odometry --ground-truth (exit $rc): $(head -c 400 "$tmp/err")"
 fi
+if [ "$(head -c 8 "$tmp/traj.png" | od -An -tx1 | tr -d ' \n')" = 89504e470d0a1a0a ] &&
+  grep -q "picture: $tmp/traj.png" "$tmp/out"; then
+  pass "odometry --picture writes a PNG of the trajectory and the ground truth"
+else
+  fail "odometry --picture: no PNG at $tmp/traj.png"
+fi
+rm -f "$tmp/traj.jpg"
+expect_error "odometry --picture with a name that is not .png" 'give it a .png name' \
+  odometry "$seq" --poses-out "$tmp/m.txt" --picture "$tmp/traj.jpg"
+[ ! -e "$tmp/traj.jpg" ] && pass "odometry --picture x.jpg: refused before anything is written" ||
+  fail "odometry --picture x.jpg wrote a file"
 
 KITTI="$SHARED/kitti_odometry_seq00"
 if [ -d "$KITTI/velodyne" ]; then

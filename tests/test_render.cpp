@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "sgdicp/error.hpp"
 #include "test_support.hpp"
 
@@ -167,6 +169,64 @@ TEST(Render, UnwritablePathThrowsIoErrorNamingThePath) {
   } catch (const sgdicp::IoError& e) {
     EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
   }
+}
+
+/// A circle of `n` poses (radius 2 m, rising slowly), the camera turning with it.
+std::vector<Eigen::Matrix4d> circle_path(const int n) {
+  std::vector<Eigen::Matrix4d> poses;
+  for (int i = 0; i < n; ++i) {
+    const double t = 2.0 * 3.141592653589793 * i / n;
+    Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+    T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(t, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    T.topRightCorner<3, 1>() << 2.0 * std::cos(t), 2.0 * std::sin(t), 0.01 * i;
+    poses.push_back(T);
+  }
+  return poses;
+}
+
+TEST(RenderTrajectories, WritesPngWithAndWithoutGroundTruth) {
+  const TempDir dir;
+  const auto truth = circle_path(200);
+  auto estimate = truth;
+  for (auto& T : estimate) T(0, 3) += 0.05;  // 5 cm off: a second line beside the first
+  sgdicp::render_trajectories_png(dir.path() / "both.png", estimate, truth,
+                                  Eigen::Matrix4d::Identity(), {800, 400, 200000});
+  sgdicp::render_trajectories_png(dir.path() / "again.png", estimate, truth,
+                                  Eigen::Matrix4d::Identity(), {800, 400, 200000});
+  sgdicp::render_trajectories_png(dir.path() / "alone.png", estimate, {},
+                                  Eigen::Matrix4d::Identity(), {800, 400, 200000});
+  Eigen::Matrix4d shift = Eigen::Matrix4d::Identity();
+  shift(1, 3) = 0.5;  // the alignment moves the estimate
+  sgdicp::render_trajectories_png(dir.path() / "shifted.png", estimate, truth, shift,
+                                  {800, 400, 200000});
+  const auto both = read_bytes(dir.path() / "both.png");
+  expect_png(both, 800, 400);
+  EXPECT_EQ(both, read_bytes(dir.path() / "again.png"));
+  EXPECT_NE(both, read_bytes(dir.path() / "alone.png"));
+  EXPECT_NE(both, read_bytes(dir.path() / "shifted.png"));
+  expect_png(read_bytes(dir.path() / "alone.png"), 800, 400);
+  // One pose (no path) still draws.
+  sgdicp::render_trajectories_png(dir.path() / "one.png", {Eigen::Matrix4d::Identity()}, {},
+                                  Eigen::Matrix4d::Identity());
+  expect_png(read_bytes(dir.path() / "one.png"), 1200, 600);
+}
+
+TEST(RenderTrajectories, RejectsEmptyOrNonFinitePoses) {
+  const TempDir dir;
+  const fs::path file = dir.path() / "x.png";
+  const auto path = circle_path(10);
+  const Eigen::Matrix4d I = Eigen::Matrix4d::Identity();
+  EXPECT_THROW(sgdicp::render_trajectories_png(file, {}, path, I), sgdicp::InvalidInputError);
+  auto bad = path;
+  bad[3](0, 3) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sgdicp::render_trajectories_png(file, bad, path, I), sgdicp::InvalidInputError);
+  EXPECT_THROW(sgdicp::render_trajectories_png(file, path, bad, I), sgdicp::InvalidInputError);
+  Eigen::Matrix4d inf = I;
+  inf(2, 3) = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(sgdicp::render_trajectories_png(file, path, path, inf), sgdicp::InvalidInputError);
+  EXPECT_THROW(sgdicp::render_trajectories_png(file, path, {}, I, {63, 600, 1000}),
+               sgdicp::InvalidSettingsError);
+  EXPECT_FALSE(fs::exists(file));
 }
 
 }  // namespace
