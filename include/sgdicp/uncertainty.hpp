@@ -76,7 +76,7 @@ struct UncertaintySettings {
   /// svgd: particles K (measured: docs/uncertainty.md).
   std::size_t particles = 32;
   /// svgd: Adam iterations on the Stein direction, each on one mini-batch shared by all particles.
-  std::size_t svgd_iterations = 100;
+  std::size_t svgd_iterations = 50;
   /// svgd: Adam's last step, in posterior standard deviations (whitened units); the step decays
   /// geometrically from kSvgdFirstStep * svgd_spread (the scale of the initial cloud) to this.
   double svgd_step = 0.05;
