@@ -193,21 +193,23 @@ struct Posterior {
   PoseMatrix precision;  // H / (sigma^2 tau) + prior
 };
 
+// g_batch(theta): sum w J^T Omega e over a mini-batch with the run's own pairing and cost.
+PoseVector batch_gradient(const UncertaintyProblem& p, const std::vector<std::uint32_t>& batch,
+                          const PoseVector& theta) {
+  return 2.0 * p.batch_cost(batch, theta, false).gradient(1);
+}
+
 // grad U at theta from one mini-batch, with the control variate of the optimum (Baker et al.
-// 2019): grad U(theta_hat) + N/m (g_batch(theta) - g_batch(theta_hat)), plus the prior's.
+// 2019): grad U(theta_hat) + N/m (g_batch(theta) - g_batch(theta_hat)), plus the prior's;
+// at_hat = g_batch(theta_hat).
 PoseVector energy_gradient(const UncertaintyProblem& p, const Posterior& post,
                            const std::vector<std::uint32_t>& batch, const PoseVector& theta,
                            const PoseVector& at_hat) {
   const double n_over_m = static_cast<double>(p.source->size()) /
                           static_cast<double>(std::min(p.batch_size, p.source->size()));
-  const PoseVector at_theta = 2.0 * p.batch_cost(batch, theta, false).gradient(1);
-  return (post.jte_hat + n_over_m * (at_theta - at_hat)) * post.inv_variance +
+  return (post.jte_hat + n_over_m * (batch_gradient(p, batch, theta) - at_hat)) *
+             post.inv_variance +
          prior_information().cwiseProduct(theta - p.theta_init);
-}
-
-PoseVector batch_gradient(const UncertaintyProblem& p, const std::vector<std::uint32_t>& batch,
-                          const PoseVector& theta) {
-  return 2.0 * p.batch_cost(batch, theta, false).gradient(1);
 }
 
 // Pre-conditioned SGLD (Li et al. 2016, eq. 4 without the Gamma term) on the energy
@@ -273,12 +275,24 @@ std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
   return phi;
 }
 
-// Stein ICP (Maken et al. 2022) in the space whitened by the Laplace precision P = L L^T,
-// z = L^T (theta - theta_hat): one unit is one posterior standard deviation along every axis,
-// so the kernel compares translation (scaled units) and rotation (rad) on one scale. The
-// particles start at N(0, spread^2 I), the Laplace covariance inflated by spread^2. Returns z.
+// The space whitened by the Laplace precision P = L L^T: z = L^T (theta - theta_hat), one unit
+// one posterior standard deviation along every axis, so that distances compare translation
+// (scaled units) and rotation (rad) on one scale; gradients map by grad_z = L^-1 grad_theta.
+struct Whitening {
+  PoseVector theta_hat;
+  Eigen::LLT<PoseMatrix> llt;
+  [[nodiscard]] PoseVector theta(const PoseVector& z) const {
+    return theta_hat + llt.matrixU().solve(z);
+  }
+  [[nodiscard]] PoseVector gradient(const PoseVector& grad_theta) const {
+    return llt.matrixL().solve(grad_theta);
+  }
+};
+
+// Stein ICP (Maken et al. 2022) in the whitened space, where the kernel's distances are taken.
+// The particles start at N(0, spread^2 I), the Laplace covariance inflated by spread^2. Returns z.
 std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const UncertaintySettings& s,
-                                       const Posterior& post, const Eigen::LLT<PoseMatrix>& llt) {
+                                       const Posterior& post, const Whitening& white) {
   EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
   Gaussian normal(p.seed);
   std::vector<PoseVector> z(s.particles);
@@ -292,8 +306,7 @@ std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const Uncert
     sampler.next_batch(p.batch_size, batch);
     const PoseVector at_hat = batch_gradient(p, batch, post.theta_hat);
     for (std::size_t i = 0; i < zs.size(); ++i) {
-      const PoseVector theta = post.theta_hat + llt.matrixU().solve(zs[i]);
-      grads[i] = llt.matrixL().solve(energy_gradient(p, post, batch, theta, at_hat));
+      grads[i] = white.gradient(energy_gradient(p, post, batch, white.theta(zs[i]), at_hat));
     }
   };
   return stein_descent(std::move(z), gradients, s.svgd_iterations, kSvgdFirstStep * s.svgd_spread,
@@ -333,10 +346,10 @@ void fill_from_samples(const UncertaintyProblem& p, const std::vector<PoseVector
 // svgd: the particles as samples, their modes (each averaged from its own first particle, so
 // that a mode half a turn away is not wrapped), and the heaviest mode's covariance.
 void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVector>& z,
-                         const Posterior& post, const Eigen::LLT<PoseMatrix>& llt,
-                         const PoseVector& reported_hat, RegistrationResult& result) {
+                         const Whitening& white, const PoseVector& reported_hat,
+                         RegistrationResult& result) {
   std::vector<PoseVector> thetas;
-  for (const PoseVector& zi : z) thetas.push_back(post.theta_hat + llt.matrixU().solve(zi));
+  for (const PoseVector& zi : z) thetas.push_back(white.theta(zi));
   fill_from_samples(p, thetas, reported_hat, result);
   result.modes.clear();
   // Particles the kernel cannot tell apart (k > 0.94) share their gradients and move as one.
@@ -442,8 +455,8 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
     if (s.method == UncertaintyType::sgld) {
       fill_from_samples(p, sgld_chain(p, s, post), reported_hat, result);
     } else {
-      const Eigen::LLT<PoseMatrix> llt(post.precision);
-      fill_from_particles(p, svgd_particles(p, s, post, llt), post, llt, reported_hat, result);
+      const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
+      fill_from_particles(p, svgd_particles(p, s, post, white), white, reported_hat, result);
     }
   }
   result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
