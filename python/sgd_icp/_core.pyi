@@ -304,7 +304,7 @@ class UncertaintySettings:
     """svgd: particles K, in [1, 10000]. Keyword particles=. Default 32."""
     svgd_iterations: int
     """svgd: iterations, one mini-batch shared by every particle each, in [1, 1000000]. Keyword
-    svgd_iterations=. Default 100.
+    svgd_iterations=. Default 50.
     """
     svgd_step: float
     """svgd: Adam's last step (it decays geometrically from a fifth of the initial spread),
@@ -1120,7 +1120,7 @@ def register(
         robust_scaling (True), record_trace (False), uncertainty (UncertaintyType.none),
         uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
         thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), particles (32, [1, 10000]),
-        svgd_iterations (100, [1, 1000000]), svgd_step (0.05, [0.0001, 10]),
+        svgd_iterations (50, [1, 1000000]), svgd_step (0.05, [0.0001, 10]),
         svgd_spread (3.0, [0.001, 1000000000]), temper (True), block_size (Distance.scaled(0.1)).
         See docs/python.md for the settings each one sets.
 
