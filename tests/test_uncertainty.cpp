@@ -1,7 +1,8 @@
 // Tests of the pose uncertainty (uncertainty.hpp): the Jacobians against finite differences, the
 // Laplace covariance against the analytic covariance of a problem with known noise, SGLD's
-// reproducibility and its agreement with Laplace, the free directions of degenerate scenes, and
-// the settings' checks.
+// reproducibility and its agreement with Laplace, SVGD (one particle = Adam descent, the kernel's
+// spread, the modes of a symmetric object), the free directions of degenerate scenes, and the
+// settings' checks.
 #include <gtest/gtest.h>
 
 #include <cmath>

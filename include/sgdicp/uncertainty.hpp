@@ -114,8 +114,8 @@ struct UncertaintyProblem {
   PoseVector theta_init = PoseVector::Zero();  ///< scaled: the centre of the prior
 };
 
-/// Fills covariance, covariance_se3 (and for sgld samples, sample_mean) of `result` for the
-/// scaled point estimate theta_hat, after kPolishSteps Gauss-Newton steps over every pair that
+/// Fills covariance, covariance_se3 (sgld, svgd: samples, sample_mean; svgd: modes) of `result` for
+/// the scaled point estimate theta_hat, after kPolishSteps Gauss-Newton steps over every pair that
 /// bring it to the full-data optimum; returns that optimum (scaled), the pose to report.
 [[nodiscard]] PoseVector estimate_uncertainty(const UncertaintyProblem& problem,
                                               const UncertaintySettings& settings,
