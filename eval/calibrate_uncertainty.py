@@ -3,6 +3,7 @@
 
 usage: eval/calibrate_uncertainty.py [--trials N] [--noise-scale F] [--out DIR] [--datasets LIST]
                                      [--methods LIST] [--particles LIST] [--svgd-iterations N]
+                                     [--svgd-spread S]
 
 For each dataset, `--trials` independent problems are drawn from one scene: the scene's points are
 split at random into two halves (source, reference), each half gets its own Gaussian sensor noise
@@ -193,14 +194,17 @@ def main() -> None:
                     help="svgd particle counts, comma-separated (one row pair per count)")
     ap.add_argument("--svgd-iterations", type=int, default=None,
                     help="svgd iterations (default: the library's)")
+    ap.add_argument("--svgd-spread", type=float, default=None,
+                    help="svgd initial spread in Laplace standard deviations (default: the "
+                    "library's)")
     ap.add_argument("--out", type=Path, default=Path("results/uncertainty"))
     args = ap.parse_args()
     noise = {d: v * args.noise_scale for d, v in NOISE_M.items()}
     settings = methods(args.methods.split(","), [int(k) for k in args.particles.split(",")])
-    if args.svgd_iterations is not None:
-        for kw in settings.values():
-            if kw["uncertainty"] == "svgd":
-                kw["svgd_iterations"] = args.svgd_iterations
+    svgd_options = dict(svgd_iterations=args.svgd_iterations, svgd_spread=args.svgd_spread)
+    for kw in settings.values():
+        if kw["uncertainty"] == "svgd":
+            kw.update({k: v for k, v in svgd_options.items() if v is not None})
     print(run(args.datasets.split(","), args.trials, noise, args.out, settings))
 
 
