@@ -214,6 +214,15 @@ nlohmann::json result_to_json(const RegistrationResult& r) {
       j["sample_mean"] = std::vector<double>(r.sample_mean.data(), r.sample_mean.data() + 6);
       j["samples"] = r.samples.size();
     }
+    if (!r.modes.empty()) {
+      nlohmann::json modes = nlohmann::json::array();
+      for (const PoseMode& m : r.modes) {
+        modes.push_back({{"weight", m.weight},
+                         {"mean", std::vector<double>(m.mean.data(), m.mean.data() + 6)},
+                         {"covariance", pose_matrix_to_json(m.covariance)}});
+      }
+      j["modes"] = modes;
+    }
   }
   return j;
 }

@@ -73,14 +73,21 @@ void print_uncertainty(const RegistrationResult& r) {
             << ' ' << sd(4) * 180.0 / std::numbers::pi << ' ' << sd(5) * 180.0 / std::numbers::pi
             << " (correlation factor " << r.correlation_factor << ", " << r.uncertainty_ms
             << " ms)\n";
+  if (r.modes.size() > 1) {
+    std::cout << "modes: " << r.modes.size() << " (the std is the first's), weights";
+    for (const PoseMode& m : r.modes) std::cout << ' ' << m.weight;
+    std::cout << '\n';
+  }
 }
 
 void run(const RegisterOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   if (!o.picture.empty()) check_picture_name(o.picture);
-  if (!o.samples.empty() && method.sgd.uncertainty.method != UncertaintyType::sgld) {
+  const UncertaintyType uncertainty = method.sgd.uncertainty.method;
+  if (!o.samples.empty() && uncertainty != UncertaintyType::sgld &&
+      uncertainty != UncertaintyType::svgd) {
     throw InvalidSettingsError("--samples " + o.samples +
-                               ": only --uncertainty sgld draws samples");
+                               ": only --uncertainty sgld or svgd draws samples");
   }
   const Eigen::Matrix4d T_init =
       o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
@@ -196,9 +203,10 @@ void add_register_command(CLI::App& app) {
       "--trace", o->trace,
       "Write the per-iteration trace (pose, step size, d_max, points processed) as CSV");
   add_depth_options(*cmd, o->depth);
-  cmd->add_option("--samples", o->samples,
-                  "Write the SGLD samples (--uncertainty sgld), one pose vector x y z roll pitch "
-                  "yaw per line (metres, radians)");
+  cmd->add_option(
+      "--samples", o->samples,
+      "Write the SGLD samples (--uncertainty sgld) or the SVGD particles (--uncertainty "
+      "svgd), one pose vector x y z roll pitch yaw per line (metres, radians)");
   add_method_options(*cmd, o->settings, false);
   add_settings_options(*cmd, o->settings);
   cmd->callback([o] { run(*o); });

@@ -2,6 +2,8 @@
 """Is the reported pose covariance the spread of the actual errors? A Monte-Carlo check.
 
 usage: eval/calibrate_uncertainty.py [--trials N] [--noise-scale F] [--out DIR] [--datasets LIST]
+                                     [--methods LIST] [--particles LIST] [--svgd-iterations N]
+                                     [--svgd-spread S]
 
 For each dataset, `--trials` independent problems are drawn from one scene: the scene's points are
 split at random into two halves (source, reference), each half gets its own Gaussian sensor noise
@@ -16,6 +18,9 @@ compared with the reported covariance P:
 Datasets: 'synthetic' (a floor, two walls, a box and a ball, 20k points, the unit tests' scene),
 'kitti' (KITTI 00 scan 0, 120k points), 'bunny' (PCL bunny, 36k points), 'kinect' (ETH Kinect
 map, 38k points): real geometry, so the test is independent of the estimator's own model.
+
+svgd reports the covariance of its heaviest mode; the CSV has its number of modes per trial.
+--particles 16,32,64 runs svgd once per particle count (rows 'svgd K=16 (tempered)', ...).
 
 Writes DIR/calibration.csv (one row per trial and method) and DIR/calibration.md (the table of
 docs/uncertainty.md). Needs the sgd_icp package (`pip install .`) and numpy.
@@ -35,12 +40,22 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 CHI2_1SIGMA, CHI2_2SIGMA = 7.0406, 12.8491
 
 NOISE_M = {"synthetic": 0.01, "kitti": 0.02, "bunny": 0.001, "kinect": 0.005}
-METHODS = {
-    "laplace (naive)": dict(uncertainty="laplace", temper=False),
-    "laplace (tempered)": dict(uncertainty="laplace", temper=True),
-    "sgld (naive)": dict(uncertainty="sgld", temper=False),
-    "sgld (tempered)": dict(uncertainty="sgld", temper=True),
-}
+
+
+def methods(names: list[str], particles: list[int]) -> dict:
+    """The uncertainty settings of each row: every method naive and tempered; svgd once per
+    particle count when more than one is given."""
+    out = {}
+    for name in names:
+        for temper in (False, True):
+            label = "tempered" if temper else "naive"
+            if name != "svgd" or len(particles) == 1:
+                extra = dict(particles=particles[0]) if name == "svgd" else {}
+                out[f"{name} ({label})"] = dict(uncertainty=name, temper=temper, **extra)
+                continue
+            for k in particles:
+                out[f"svgd K={k} ({label})"] = dict(uncertainty=name, temper=temper, particles=k)
+    return out
 
 
 def synthetic_scene(rng: np.random.Generator, n: int = 40000) -> np.ndarray:
@@ -103,15 +118,15 @@ def error_of(T_est: np.ndarray, T_gt: np.ndarray) -> np.ndarray:
     return e
 
 
-def run(datasets, trials, noise: dict, out: Path) -> str:
+def run(datasets, trials, noise: dict, out: Path, settings: dict) -> str:
     rows, table = [], []
     for name in datasets:
         rng = np.random.default_rng(2026)
         scene = load_scene(name, rng)
         noise_m = noise[name]
-        errors = {m: [] for m in METHODS}
-        covs = {m: [] for m in METHODS}
-        times = {m: [] for m in METHODS}
+        errors = {m: [] for m in settings}
+        covs = {m: [] for m in settings}
+        times = {m: [] for m in settings}
         kappas = []
         base_ms = []
         for trial in range(trials):
@@ -122,7 +137,7 @@ def run(datasets, trials, noise: dict, out: Path) -> str:
             t0 = time.perf_counter()
             base = sgd_icp.register(src, index, seed=trial)
             base_ms.append(1e3 * (time.perf_counter() - t0))
-            for m, kw in METHODS.items():
+            for m, kw in settings.items():
                 t0 = time.perf_counter()
                 r = sgd_icp.register(src, index, seed=trial, **kw)
                 times[m].append(1e3 * (time.perf_counter() - t0))
@@ -131,10 +146,10 @@ def run(datasets, trials, noise: dict, out: Path) -> str:
                 covs[m].append(np.array(r.covariance))
                 nees = float(e @ np.linalg.solve(r.covariance, e))
                 rows.append((name, trial, m, nees, *e, *np.sqrt(np.diag(r.covariance)),
-                             r.correlation_factor, times[m][-1]))
-                if m == "laplace (tempered)":
+                             r.correlation_factor, times[m][-1], len(r.modes)))
+                if m.endswith("(tempered)") and len(kappas) <= trial:
                     kappas.append(r.correlation_factor)
-        for m in METHODS:
+        for m in settings:
             e, P = np.array(errors[m]), np.array(covs[m])
             nees = np.array([ei @ np.linalg.solve(Pi, ei) for ei, Pi in zip(e, P)])
             second = e.T @ e / len(e)
@@ -148,7 +163,7 @@ def run(datasets, trials, noise: dict, out: Path) -> str:
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "calibration.csv", "w") as f:
         f.write("dataset,trial,method,nees,ex,ey,ez,eroll,epitch,eyaw,"
-                "sx,sy,sz,sroll,spitch,syaw,kappa,time_ms\n")
+                "sx,sy,sz,sroll,spitch,syaw,kappa,time_ms,modes\n")
         for row in rows:
             f.write(",".join(str(v) for v in row) + "\n")
     lines = [
@@ -176,10 +191,23 @@ def main() -> None:
                     help="multiplies the sensor noise of every dataset (synthetic 1 cm, KITTI "
                     "2 cm, bunny 1 mm, Kinect 5 mm)")
     ap.add_argument("--datasets", default="synthetic,kitti,bunny,kinect")
+    ap.add_argument("--methods", default="laplace,sgld,svgd")
+    ap.add_argument("--particles", default="32",
+                    help="svgd particle counts, comma-separated (one row pair per count)")
+    ap.add_argument("--svgd-iterations", type=int, default=None,
+                    help="svgd iterations (default: the library's)")
+    ap.add_argument("--svgd-spread", type=float, default=None,
+                    help="svgd initial spread in Laplace standard deviations (default: the "
+                    "library's)")
     ap.add_argument("--out", type=Path, default=Path("results/uncertainty"))
     args = ap.parse_args()
     noise = {d: v * args.noise_scale for d, v in NOISE_M.items()}
-    print(run(args.datasets.split(","), args.trials, noise, args.out))
+    settings = methods(args.methods.split(","), [int(k) for k in args.particles.split(",")])
+    svgd_options = dict(svgd_iterations=args.svgd_iterations, svgd_spread=args.svgd_spread)
+    for kw in settings.values():
+        if kw["uncertainty"] == "svgd":
+            kw.update({k: v for k, v in svgd_options.items() if v is not None})
+    print(run(args.datasets.split(","), args.trials, noise, args.out, settings))
 
 
 if __name__ == "__main__":

@@ -507,7 +507,8 @@ std::vector<Setting<S>> uncertainty_settings() {
            {},
            "",
            "Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the "
-           "residual variance) or sgld (Bayesian ICP: Langevin samples)"}),
+           "residual variance), sgld (Bayesian ICP: Langevin samples) or svgd (Stein ICP: "
+           "particles, clustered into modes)"}),
       setting<S, &S::uncertainty, &U::samples>(
           {"uncertainty-samples", "uncertainty.samples", {2.0, 1e6}, "", "sgld: samples kept"}),
       setting<S, &S::uncertainty, &U::burn_in>({"burn-in",
@@ -524,6 +525,27 @@ std::vector<Setting<S>> uncertainty_settings() {
            {1e-4, 1.0},
            "",
            "sgld: step size, as the contraction per iteration along the stiffest axis"}),
+      setting<S, &S::uncertainty, &U::particles>(
+          {"particles", "uncertainty.particles", {1.0, 1e4}, "", "svgd: particles K"}),
+      setting<S, &S::uncertainty, &U::svgd_iterations>(
+          {"svgd-iterations",
+           "uncertainty.svgd_iterations",
+           {1.0, 1e6},
+           "",
+           "svgd: iterations, one mini-batch shared by every particle each"}),
+      setting<S, &S::uncertainty, &U::svgd_step>(
+          {"svgd-step",
+           "uncertainty.svgd_step",
+           {1e-4, 10.0},
+           "posterior std",
+           "svgd: Adam's last step (it decays geometrically from a fifth of the initial spread)"}),
+      setting<S, &S::uncertainty, &U::svgd_spread>(
+          {"svgd-spread",
+           "uncertainty.svgd_spread",
+           {1e-3, 1e9},
+           "posterior std",
+           "svgd: spread of the initial particles around the estimate, in Laplace standard "
+           "deviations (wide values reach other modes)"}),
       setting<S, &S::uncertainty, &U::temper>(
           {"temper",
            "uncertainty.temper",

@@ -13,6 +13,7 @@
 #include <Eigen/LU>
 
 #include "point_surfaces.hpp"
+#include "sgdicp/optimizer.hpp"
 #include "sgdicp/sampler.hpp"
 #include "solver_support.hpp"
 
@@ -192,15 +193,30 @@ struct Posterior {
   PoseMatrix precision;  // H / (sigma^2 tau) + prior
 };
 
-// Pre-conditioned SGLD (Li et al. 2016, eq. 4 without the Gamma term) on the energy
-// U = sum rho / (2 sigma^2 tau) - log prior, whose gradient is estimated on a mini-batch with
-// the control variate of the optimum: grad U(theta_hat) + N/m (g_batch(theta) -
-// g_batch(theta_hat)).
-std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const UncertaintySettings& s,
-                                   const Posterior& post) {
-  const PoseVector prior = prior_information();
+// g_batch(theta): sum w J^T Omega e over a mini-batch with the run's own pairing and cost.
+PoseVector batch_gradient(const UncertaintyProblem& p, const std::vector<std::uint32_t>& batch,
+                          const PoseVector& theta) {
+  return 2.0 * p.batch_cost(batch, theta, false).gradient(1);
+}
+
+// grad U at theta from one mini-batch, with the control variate of the optimum (Baker et al.
+// 2019): grad U(theta_hat) + N/m (g_batch(theta) - g_batch(theta_hat)), plus the prior's;
+// at_hat = g_batch(theta_hat).
+PoseVector energy_gradient(const UncertaintyProblem& p, const Posterior& post,
+                           const std::vector<std::uint32_t>& batch, const PoseVector& theta,
+                           const PoseVector& at_hat) {
   const double n_over_m = static_cast<double>(p.source->size()) /
                           static_cast<double>(std::min(p.batch_size, p.source->size()));
+  return (post.jte_hat + n_over_m * (batch_gradient(p, batch, theta) - at_hat)) *
+             post.inv_variance +
+         prior_information().cwiseProduct(theta - p.theta_init);
+}
+
+// Pre-conditioned SGLD (Li et al. 2016, eq. 4 without the Gamma term) on the energy
+// U = sum rho / (2 sigma^2 tau) - log prior, whose gradient is estimated on a mini-batch with
+// the control variate of the optimum.
+std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                   const Posterior& post) {
   // RMSProp's mean square starts at its stationary value, the curvature (E[(grad U)^2] = H_kk
   // for a Gaussian), so no warm-up is spent on it.
   PoseVector mean_square = post.precision.diagonal();
@@ -216,10 +232,8 @@ std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const Uncertaint
   const std::size_t iterations = s.burn_in + s.samples * s.thinning;
   for (std::size_t it = 1; it <= iterations; ++it) {
     sampler.next_batch(p.batch_size, batch);
-    const PoseVector at_theta = 2.0 * p.batch_cost(batch, theta, false).gradient(1);
-    const PoseVector at_hat = 2.0 * p.batch_cost(batch, post.theta_hat, false).gradient(1);
-    const PoseVector grad = (post.jte_hat + n_over_m * (at_theta - at_hat)) * post.inv_variance +
-                            prior.cwiseProduct(theta - p.theta_init);
+    const PoseVector grad =
+        energy_gradient(p, post, batch, theta, batch_gradient(p, batch, post.theta_hat));
     mean_square = kDecay * mean_square + (1.0 - kDecay) * grad.cwiseProduct(grad);
     const PoseVector g = mean_square.cwiseSqrt().cwiseInverse();
     for (int k = 0; k < 6; ++k) {
@@ -230,27 +244,176 @@ std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const Uncertaint
   return samples;
 }
 
+// The RBF bandwidth of the median heuristic (Liu and Wang 2016, section 5): h = med^2 /
+// log(K + 1), med the median pairwise distance, so that a particle's own term weighs about as
+// much as all the others together.
+double median_bandwidth(const std::vector<PoseVector>& z) {
+  std::vector<double> pairs;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    for (std::size_t j = i + 1; j < z.size(); ++j) pairs.push_back((z[i] - z[j]).squaredNorm());
+  }
+  if (pairs.empty()) return 1.0;  // one particle: any bandwidth gives k = 1
+  const auto mid = pairs.begin() + static_cast<std::ptrdiff_t>(pairs.size() / 2);
+  std::nth_element(pairs.begin(), mid, pairs.end());
+  return *mid > 0.0 ? *mid / std::log(static_cast<double>(z.size()) + 1.0) : 1.0;
+}
+
+// The Stein direction of every particle (Liu and Wang 2016, eq. 8): the kernel-weighted mean of
+// the particles' descent directions plus the kernel's gradient, which repels them from each
+// other.
+std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
+                                        const std::vector<PoseVector>& grads) {
+  const double h = median_bandwidth(z);
+  std::vector<PoseVector> phi(z.size(), PoseVector::Zero());
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    for (std::size_t j = 0; j < z.size(); ++j) {
+      const double k = std::exp(-(z[i] - z[j]).squaredNorm() / h);
+      phi[i] += k * (-grads[j]) + (2.0 * k / h) * (z[i] - z[j]);
+    }
+    phi[i] /= static_cast<double>(z.size());
+  }
+  return phi;
+}
+
+// The space whitened by the Laplace precision P = L L^T: z = L^T (theta - theta_hat), one unit
+// one posterior standard deviation along every axis, so that distances compare translation
+// (scaled units) and rotation (rad) on one scale; gradients map by grad_z = L^-1 grad_theta.
+struct Whitening {
+  PoseVector theta_hat;
+  Eigen::LLT<PoseMatrix> llt;
+  [[nodiscard]] PoseVector theta(const PoseVector& z) const {
+    return theta_hat + llt.matrixU().solve(z);
+  }
+  [[nodiscard]] PoseVector gradient(const PoseVector& grad_theta) const {
+    return llt.matrixL().solve(grad_theta);
+  }
+};
+
+// Stein ICP (Maken et al. 2022) in the whitened space, where the kernel's distances are taken.
+// The particles start at N(0, spread^2 I), the Laplace covariance inflated by spread^2. Returns z.
+std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                       const Posterior& post, const Whitening& white) {
+  EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
+  Gaussian normal(p.seed);
+  std::vector<PoseVector> z(s.particles);
+  for (PoseVector& zi : z) {
+    for (int k = 0; k < 6; ++k) zi[k] = s.svgd_spread * normal();
+  }
+  std::vector<std::uint32_t> batch;
+  // One mini-batch per iteration for every particle (and one control-variate term for all).
+  const ParticleGradients gradients = [&](const std::vector<PoseVector>& zs,
+                                          std::vector<PoseVector>& grads) {
+    sampler.next_batch(p.batch_size, batch);
+    const PoseVector at_hat = batch_gradient(p, batch, post.theta_hat);
+    for (std::size_t i = 0; i < zs.size(); ++i) {
+      grads[i] = white.gradient(energy_gradient(p, post, batch, white.theta(zs[i]), at_hat));
+    }
+  };
+  return stein_descent(std::move(z), gradients, s.svgd_iterations, kSvgdFirstStep * s.svgd_spread,
+                       s.svgd_step);
+}
+
+struct Moments {
+  PoseVector mean;
+  PoseMatrix covariance;
+};
+
+// Mean and covariance of reported poses, the angles averaged as offsets from `origin`.
+Moments moments_of(const std::vector<PoseVector>& poses, const PoseVector& origin) {
+  PoseVector mean_offset = PoseVector::Zero();
+  for (const PoseVector& x : poses) mean_offset += pose_difference(x, origin);
+  const auto n = static_cast<double>(poses.size());
+  mean_offset /= n;
+  Moments m{origin + mean_offset, PoseMatrix::Zero()};
+  for (int k = 3; k < 6; ++k) m.mean[k] = wrap_angle(m.mean[k]);
+  for (const PoseVector& x : poses) {
+    const PoseVector d = pose_difference(x, origin) - mean_offset;
+    m.covariance += d * d.transpose();
+  }
+  m.covariance /= std::max(1.0, n - 1.0);
+  return m;
+}
+
 void fill_from_samples(const UncertaintyProblem& p, const std::vector<PoseVector>& chain,
                        const PoseVector& reported_hat, RegistrationResult& result) {
   result.samples.clear();
-  PoseVector mean_offset = PoseVector::Zero();
-  for (const PoseVector& theta : chain) {
-    result.samples.push_back(p.to_reported(theta));
-    mean_offset += pose_difference(result.samples.back(), reported_hat);
+  for (const PoseVector& theta : chain) result.samples.push_back(p.to_reported(theta));
+  const Moments m = moments_of(result.samples, reported_hat);
+  result.sample_mean = m.mean;
+  result.covariance = m.covariance;
+}
+
+// svgd: the particles as samples, their modes (each averaged from its own first particle, so
+// that a mode half a turn away is not wrapped), and the heaviest mode's covariance.
+void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVector>& z,
+                         const Whitening& white, const PoseVector& reported_hat,
+                         RegistrationResult& result) {
+  std::vector<PoseVector> thetas;
+  for (const PoseVector& zi : z) thetas.push_back(white.theta(zi));
+  fill_from_samples(p, thetas, reported_hat, result);
+  result.modes.clear();
+  // Particles the kernel cannot tell apart (k > 0.94) share their gradients and move as one.
+  const double link =
+      std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_bandwidth(z)));
+  for (const auto& members : particle_modes(z, link)) {
+    std::vector<PoseVector> poses;
+    for (const std::size_t i : members) poses.push_back(result.samples[i]);
+    const Moments m = moments_of(poses, poses.front());
+    result.modes.push_back({static_cast<double>(members.size()) / static_cast<double>(z.size()),
+                            m.mean, m.covariance});
   }
-  const auto n = static_cast<double>(chain.size());
-  mean_offset /= n;
-  result.sample_mean = reported_hat + mean_offset;
-  for (int k = 3; k < 6; ++k) result.sample_mean[k] = wrap_angle(result.sample_mean[k]);
-  PoseMatrix cov = PoseMatrix::Zero();
-  for (const PoseVector& sample : result.samples) {
-    const PoseVector d = pose_difference(sample, reported_hat) - mean_offset;
-    cov += d * d.transpose();
-  }
-  result.covariance = cov / std::max(1.0, n - 1.0);
+  result.covariance = result.modes.front().covariance;
 }
 
 }  // namespace
+
+std::vector<PoseVector> stein_descent(std::vector<PoseVector> z,
+                                      const ParticleGradients& energy_gradients,
+                                      std::size_t iterations, double step_first, double step_last) {
+  OptimizerSettings adam;
+  adam.type = OptimizerType::adam;
+  adam.learning_rate = 1.0;  // the schedule's step is the multiplier
+  std::vector<Optimizer> optimizers(z.size(), Optimizer(adam));
+  std::vector<PoseVector> grads(z.size(), PoseVector::Zero());
+  const double last = static_cast<double>(std::max<std::size_t>(iterations, 2) - 1);
+  for (std::size_t it = 0; it < iterations; ++it) {
+    const double step =
+        step_first * std::pow(step_last / step_first, static_cast<double>(it) / last);
+    energy_gradients(z, grads);
+    const std::vector<PoseVector> phi = stein_direction(z, grads);
+    // Adam minimises along its argument: -phi ascends the Stein direction.
+    for (std::size_t i = 0; i < z.size(); ++i) {
+      z[i] += optimizers[i].step(-phi[i], PoseMatrix::Zero(), step);
+    }
+  }
+  return z;
+}
+
+std::vector<std::vector<std::size_t>> particle_modes(const std::vector<PoseVector>& z,
+                                                     double link) {
+  const std::size_t n = z.size();
+  std::vector<bool> taken(n, false);
+  std::vector<std::vector<std::size_t>> modes;
+  for (std::size_t first = 0; first < n; ++first) {
+    if (taken[first]) continue;
+    taken[first] = true;
+    std::vector<std::size_t> mode{first};
+    // Breadth-first over the particles within `link` of a member.
+    for (std::size_t q = 0; q < mode.size(); ++q) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (!taken[j] && (z[mode[q]] - z[j]).norm() < link) {
+          taken[j] = true;
+          mode.push_back(j);
+        }
+      }
+    }
+    std::sort(mode.begin(), mode.end());
+    modes.push_back(std::move(mode));
+  }
+  std::stable_sort(modes.begin(), modes.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return modes;
+}
 
 PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings& s,
                                 PoseVector theta_hat, RegistrationResult& result) {
@@ -289,7 +452,12 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
     // The control variate needs the full-data gradient of the energy the chain samples, the
     // run's own cost (point-to-point: not the surface information's).
     if (p.cost == CostType::point_to_point) post.jte_hat = run_cost_gradient(p, s, theta_hat);
-    fill_from_samples(p, sgld_chain(p, s, post), reported_hat, result);
+    if (s.method == UncertaintyType::sgld) {
+      fill_from_samples(p, sgld_chain(p, s, post), reported_hat, result);
+    } else {
+      const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
+      fill_from_particles(p, svgd_particles(p, s, post, white), white, reported_hat, result);
+    }
   }
   result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
   const PoseMatrix js = se3_jacobian(reported_hat);

@@ -746,9 +746,33 @@ if [ "$rc" -eq 0 ] && cmp -s "$tmp/samples.txt" "$tmp/samples2.txt"; then
 else
   fail "register --uncertainty sgld is not reproducible (exit $rc)"
 fi
-expect_error "register --uncertainty with an unknown name" "uncertainty.*(expected none, laplace or sgld)|uncertainty" \
+run register "$MOVED" "$REF" --uncertainty svgd --particles 8 --svgd-iterations 30 --samples "$tmp/particles.txt" --json
+if [ "$rc" -eq 0 ] && [ "$(grep -vc '^#' "$tmp/particles.txt")" -eq 8 ] && python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+modes = d["modes"]
+assert len(modes) >= 1 and abs(sum(m["weight"] for m in modes) - 1) < 1e-12
+for m in modes:
+    assert len(m["mean"]) == 6 and len(m["covariance"]) == 6 and all(len(r) == 6 for r in m["covariance"])
+assert modes[0]["covariance"] == d["covariance"] and d["samples"] == 8
+' <"$tmp/out"; then
+  pass "register --uncertainty svgd --json writes the modes (weight, mean, covariance) and --samples the particles"
+else
+  fail "register --uncertainty svgd (exit $rc): $(head -c 400 "$tmp/err") $(head -c 400 "$tmp/out")"
+fi
+run register "$MOVED" "$REF" --uncertainty laplace --json
+if [ "$rc" -eq 0 ] && python3 -c 'import json, sys; assert "modes" not in json.load(sys.stdin)' <"$tmp/out"; then
+  pass "register --uncertainty laplace --json writes no modes"
+else
+  fail "register --uncertainty laplace --json has modes (exit $rc)"
+fi
+expect_error "register --uncertainty with an unknown name" "uncertainty.*(expected none, laplace, sgld or svgd)" \
   register "$MOVED" "$REF" --uncertainty svgd2
-expect_error "register --samples without sgld" "--samples.*sgld" \
+expect_error "register --particles 0" "--particles 0: must be in" register "$MOVED" "$REF" --uncertainty svgd --particles 0
+expect_error "register --svgd-step -1" "--svgd-step -1: must be in" register "$MOVED" "$REF" --uncertainty svgd --svgd-step -1
+expect_error "register --svgd-step nan" "--svgd-step" register "$MOVED" "$REF" --uncertainty svgd --svgd-step nan
+expect_error "register --svgd-iterations 0" "--svgd-iterations 0: must be in" register "$MOVED" "$REF" --uncertainty svgd --svgd-iterations 0
+expect_error "register --samples without sgld or svgd" "--samples.*sgld or svgd" \
   register "$MOVED" "$REF" --uncertainty laplace --samples "$tmp/x.txt"
 expect_error "register --uncertainty with a batch method" "--uncertainty laplace: only the SGD methods" \
   register "$MOVED" "$REF" --method icp --uncertainty laplace

@@ -1,11 +1,14 @@
 // Tests of the pose uncertainty (uncertainty.hpp): the Jacobians against finite differences, the
 // Laplace covariance against the analytic covariance of a problem with known noise, SGLD's
-// reproducibility and its agreement with Laplace, the free directions of degenerate scenes, and
-// the settings' checks.
+// reproducibility and its agreement with Laplace, SVGD (one particle = Adam descent, the kernel's
+// spread, the modes of a symmetric object), the free directions of degenerate scenes, and the
+// settings' checks.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
+#include <sstream>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -278,6 +281,182 @@ TEST(Degenerate, CorridorHasLargeVarianceAlongItsAxis) {
   EXPECT_GT(eig.eigenvalues()[5] / eig.eigenvalues()[4], 100.0);
 }
 
+// ---- svgd (Stein ICP)
+
+SgdSettings svgd_settings(std::size_t particles, CostType cost = CostType::point_to_plane) {
+  SgdSettings s = uncertainty_settings(UncertaintyType::svgd, true, cost);
+  s.uncertainty.particles = particles;
+  return s;
+}
+
+TEST(Svgd, CovarianceIsSymmetricPositiveDefiniteAndModesAreReported) {
+  const PointCloud reference = box_surface(20000, 21);
+  const RegistrationResult r =
+      align(noisy_source(reference, kTgt, kNoise_m, 22), reference, svgd_settings(32));
+  ASSERT_TRUE(r.converged) << r.message;
+  ASSERT_EQ(r.samples.size(), 32U);
+  ASSERT_FALSE(r.modes.empty());
+  EXPECT_EQ(r.modes.front().covariance, r.covariance);
+  double weights = 0.0;
+  for (const PoseMode& m : r.modes) weights += m.weight;
+  EXPECT_DOUBLE_EQ(weights, 1.0);
+  EXPECT_EQ(r.modes.size(), 1U);  // a box seen from a small motion: one mode
+  EXPECT_LT((r.covariance - r.covariance.transpose()).norm(), 1e-15);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<PoseMatrix>(r.covariance).eigenvalues().minCoeff(), 0.0);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<PoseMatrix>(r.covariance_se3).eigenvalues().minCoeff(),
+            0.0);
+}
+
+TEST(Svgd, SameSeedSameParticlesOtherSeedOtherParticles) {
+  const PointCloud reference = box_points(2000, 23);
+  const PointCloud source = noisy_source(reference, kTgt, kNoise_m, 24);
+  SgdSettings s = svgd_settings(16, CostType::point_to_point);
+  const RegistrationResult a = align(source, reference, s);
+  const RegistrationResult b = align(source, reference, s);
+  ASSERT_EQ(a.samples.size(), 16U);
+  ASSERT_EQ(b.samples.size(), 16U);
+  for (std::size_t i = 0; i < a.samples.size(); ++i) EXPECT_EQ(a.samples[i], b.samples[i]);
+  EXPECT_EQ(a.covariance, b.covariance);
+  s.seed += 1;
+  const RegistrationResult c = align(source, reference, s);
+  ASSERT_EQ(c.samples.size(), 16U);
+  EXPECT_NE(a.samples.front(), c.samples.front());
+}
+
+// A non-quadratic energy whose gradient changes every call (as a mini-batch's does).
+struct NoisyEnergy {
+  std::mt19937_64 rng{31};
+  PoseVector operator()(const PoseVector& z) {
+    PoseVector g;
+    for (int k = 0; k < 6; ++k) g[k] = (k + 1) * z[k] + std::sin(z[k]) + uniform(rng, -0.3, 0.3);
+    return g;
+  }
+};
+
+// With one particle the kernel term vanishes and its weight is 1: SVGD is Adam descent on U.
+TEST(Svgd, OneParticleIsAdamDescentOnTheEnergy) {
+  PoseVector start;
+  start << 3.0, -2.0, 1.5, 0.5, -4.0, 2.5;
+  constexpr std::size_t kIterations = 60;
+  NoisyEnergy svgd_energy;
+  const std::vector<PoseVector> particles = stein_descent(
+      {start},
+      [&](const std::vector<PoseVector>& z, std::vector<PoseVector>& g) {
+        g[0] = svgd_energy(z[0]);
+      },
+      kIterations, 0.6, 0.01);
+  // Adam (Kingma and Ba 2015, Algorithm 1) with the same geometric step schedule.
+  NoisyEnergy energy;
+  PoseVector x = start, m = PoseVector::Zero(), v = PoseVector::Zero();
+  for (std::size_t t = 1; t <= kIterations; ++t) {
+    const double step = 0.6 * std::pow(0.01 / 0.6, static_cast<double>(t - 1) / (kIterations - 1));
+    const PoseVector g = energy(x);
+    m = 0.9 * m + 0.1 * g;
+    v = 0.999 * v + 0.001 * g.cwiseProduct(g);
+    const PoseVector m_hat = m / (1.0 - std::pow(0.9, static_cast<double>(t)));
+    const PoseVector v_hat = v / (1.0 - std::pow(0.999, static_cast<double>(t)));
+    x -= step * m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + 1e-8).matrix());
+  }
+  ASSERT_EQ(particles.size(), 1U);
+  EXPECT_LT((particles[0] - x).norm(), 1e-12)
+      << particles[0].transpose() << " vs " << x.transpose();
+  EXPECT_LT(x.norm(), 0.5);  // it did descend
+}
+
+// On a standard Gaussian U = |z|^2 / 2 the kernel's repulsion keeps the particles spread about
+// as the distribution (without it they would all collapse onto its mode).
+TEST(Svgd, ParticlesSpreadLikeAStandardGaussian) {
+  std::mt19937_64 rng(33);
+  std::vector<PoseVector> z(64);
+  for (PoseVector& zi : z) {
+    for (int k = 0; k < 6; ++k) zi[k] = uniform(rng, -4.0, 4.0);
+  }
+  const std::vector<PoseVector> out = stein_descent(
+      z, [](const std::vector<PoseVector>& x, std::vector<PoseVector>& g) { g = x; }, 300, 0.5,
+      0.01);
+  PoseVector mean = PoseVector::Zero();
+  for (const PoseVector& zi : out) mean += zi / 64.0;
+  double variance = 0.0;
+  for (const PoseVector& zi : out) variance += (zi - mean).squaredNorm() / (6.0 * 63.0);
+  EXPECT_LT(mean.norm(), 0.3);
+  EXPECT_GT(variance, 0.4);
+  EXPECT_LT(variance, 1.5);
+}
+
+TEST(Svgd, ParticleModesAreConnectedComponentsInADeterministicOrder) {
+  std::vector<PoseVector> z(5, PoseVector::Zero());
+  z[0][0] = 100.0;  // alone
+  z[2][0] = 3.0;    // linked to 1 and 4 through the chain 1 - 2 - 4
+  z[3][0] = 104.0;  // with 0
+  z[4][0] = 6.0;
+  const auto modes = particle_modes(z, kModeLinkDistance);
+  ASSERT_EQ(modes.size(), 2U);
+  EXPECT_EQ(modes[0], (std::vector<std::size_t>{1, 2, 4}));
+  EXPECT_EQ(modes[1], (std::vector<std::size_t>{0, 3}));
+}
+
+// A box has a half-turn symmetry about each of its three axes: particles spread over about a
+// radian and a half reach the symmetric poses, and svgd reports a mode at the estimate and at
+// half-turns; laplace describes one Gaussian around the estimate.
+TEST(Svgd, SymmetricObjectHasAModeAtEachSymmetricPose) {
+  // Few points and 5 mm noise: a posterior wide enough that particles spread over a half-turn
+  // converge within the iterations (the step spans spread / svgd_step).
+  PointCloud reference = box_surface(500, 25);
+  const Eigen::Vector3f centre(0.5F, 0.75F, 0.35F);
+  for (auto& p : reference.points) p -= centre;  // centred on its axes of symmetry
+  const Eigen::Matrix4d T = make_transform(0.02, -0.01, 0.01, {0.0, 0.0, 0.05});
+  const PointCloud source = noisy_source(reference, T, 5.0 * kNoise_m, 26);
+  SgdSettings s = svgd_settings(64);
+  // Pairs everywhere (no refinement of d_max): far particles feel the energy.
+  s.refinement.stages = 0;
+  s.max_correspondence_distance = Distance::scaled(1.0);
+  s.uncertainty.svgd_iterations = 1000;
+  s.uncertainty.method = UncertaintyType::laplace;
+  const RegistrationResult laplace = align(source, reference, s);
+  ASSERT_TRUE(laplace.converged) << laplace.message;
+  EXPECT_TRUE(laplace.modes.empty());
+  s.uncertainty.method = UncertaintyType::svgd;
+  s.uncertainty.svgd_spread = 1.5 / std::sqrt(laplace.covariance(5, 5));
+  const RegistrationResult r = align(source, reference, s);
+  // The estimate, then its half-turns about x, y and z.
+  std::vector<PoseVector> poses{pose_from_transform(T)};
+  for (int axis = 0; axis < 3; ++axis) {
+    Eigen::Vector3d rpy = Eigen::Vector3d::Zero();
+    rpy[axis] = std::numbers::pi;
+    poses.push_back(pose_from_transform(
+        make_transform(rpy.x(), rpy.y(), rpy.z(), Eigen::Vector3d::Zero()) * T));
+  }
+  double at_estimate = 0.0, at_half_turns = 0.0;
+  std::ostringstream modes;
+  for (const PoseMode& m : r.modes) {
+    modes << m.weight << " at " << m.mean.transpose() << "\n";
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      PoseVector d = m.mean - poses[k];
+      for (int a = 3; a < 6; ++a) d[a] = wrap_angle(d[a]);
+      if (d.head<3>().norm() < 0.01 && d.tail<3>().norm() < 0.03) {
+        (k == 0 ? at_estimate : at_half_turns) += m.weight;
+      }
+    }
+  }
+  EXPECT_GE(r.modes.size(), 2U);
+  EXPECT_GT(at_estimate, 0.1) << modes.str();
+  EXPECT_GT(at_half_turns, 0.1) << modes.str();
+}
+
+TEST(Degenerate, SvgdPlaneHasLargeVarianceAlongItsFreeDirections) {
+  const PointCloud reference = plane_points(5000, false, 13);
+  const Eigen::Matrix4d T = make_transform(0.01, 0.01, 0.0, {0.0, 0.0, 0.01});
+  const RegistrationResult r =
+      align(noisy_source(reference, T, kNoise_m, 14), reference, svgd_settings(32));
+  ASSERT_NE(r.stop_reason, StopReason::diverged) << r.message;
+  ASSERT_EQ(r.modes.size(), 1U);
+  const Eigen::Matrix3d t = r.covariance.topLeftCorner<3, 3>();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(t);
+  EXPECT_GT(eig.eigenvalues()[1] / t(2, 2), 1e4);           // x and y both free
+  EXPECT_GT(r.covariance(5, 5) / r.covariance(3, 3), 1e4);  // yaw free, roll held
+  EXPECT_GT(r.covariance(5, 5) / r.covariance(4, 4), 1e4);  // pitch held
+}
+
 TEST(UncertaintySettings, BadValuesAreRejectedNamingTheSetting) {
   SgdSettings s;
   s.uncertainty.samples = 0;
@@ -301,9 +480,37 @@ TEST(UncertaintySettings, BadValuesAreRejectedNamingTheSetting) {
     (void)parse_enum<UncertaintyType>("svgd2");
     FAIL() << "no error";
   } catch (const InvalidSettingsError& e) {
-    EXPECT_STREQ(e.what(), "unknown uncertainty method 'svgd2' (expected none, laplace or sgld)");
+    EXPECT_STREQ(e.what(),
+                 "unknown uncertainty method 'svgd2' (expected none, laplace, sgld or svgd)");
   }
   EXPECT_EQ(parse_enum<UncertaintyType>("sgld"), UncertaintyType::sgld);
+  EXPECT_EQ(parse_enum<UncertaintyType>("svgd"), UncertaintyType::svgd);
+  // svgd: zero particles, a step that is not a positive number, zero iterations.
+  s = SgdSettings{};
+  s.uncertainty.particles = 0;
+  try {
+    s.validate(SettingNames::cli);
+    FAIL() << "no error";
+  } catch (const InvalidSettingsError& e) {
+    EXPECT_NE(std::string(e.what()).find("--particles 0: must be in [1, 10000]"), std::string::npos)
+        << e.what();
+  }
+  s = SgdSettings{};
+  for (const double bad : {std::nan(""), -0.1, 0.0}) {
+    s.uncertainty.svgd_step = bad;
+    try {
+      s.validate(SettingNames::field);
+      FAIL() << "no error for " << bad;
+    } catch (const InvalidSettingsError& e) {
+      EXPECT_NE(std::string(e.what()).find("uncertainty.svgd_step"), std::string::npos) << e.what();
+    }
+  }
+  s = SgdSettings{};
+  s.uncertainty.svgd_iterations = 0;
+  EXPECT_THROW(s.validate(), InvalidSettingsError);
+  s = SgdSettings{};
+  s.uncertainty.svgd_spread = -1.0;
+  EXPECT_THROW(s.validate(), InvalidSettingsError);
 }
 
 }  // namespace

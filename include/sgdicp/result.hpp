@@ -48,6 +48,14 @@ struct TraceEntry {
   double cost = 0.0;  ///< mini-batch cost F (batch: mean squared pair distance), scaled units^2
 };
 
+/// One mode of a multi-modal pose posterior (svgd: a cluster of its particles).
+struct PoseMode {
+  double weight = 0.0;  ///< fraction of the particles
+  /// Mean and covariance of theta = (x, y, z, roll, pitch, yaw), metres and radians.
+  Eigen::Matrix<double, 6, 1> mean = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
 struct RegistrationResult {
   Eigen::Matrix4d T_reference_source = Eigen::Matrix4d::Identity();
   bool converged = false;
@@ -86,9 +94,11 @@ struct RegistrationResult {
   /// The same in the tangent space of SE(3): xi = (rho, phi), translation first, right
   /// perturbation T = T_reference_source * Exp(xi) (source frame), metres and radians.
   Eigen::Matrix<double, 6, 6> covariance_se3 = Eigen::Matrix<double, 6, 6>::Zero();
-  /// sgld: the samples of theta (as `covariance`), and their mean.
+  /// sgld: the samples of theta (as `covariance`), svgd: the particles; and their mean.
   std::vector<Eigen::Matrix<double, 6, 1>> samples;
   Eigen::Matrix<double, 6, 1> sample_mean = Eigen::Matrix<double, 6, 1>::Zero();
+  /// svgd: the modes of the particles, heaviest first (`covariance` is the first's).
+  std::vector<PoseMode> modes;
   double residual_sigma_m = 0.0;      ///< RMS of the scalar residuals at the optimum, metres
   double correlation_factor = 0.0;    ///< kappa: naive covariance too narrow by this factor
   std::size_t uncertainty_pairs = 0;  ///< pairs of the full-data pass at the optimum

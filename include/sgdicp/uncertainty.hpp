@@ -7,6 +7,10 @@
 //            gradient of the registration's own pairing, started at the point estimate, with a
 //            control variate at the optimum (Baker et al. 2019) so that the mini-batch noise
 //            does not widen the chain.
+//   svgd:    Stein ICP (Maken, Ramos, Ott, RA-L 2022): Stein variational gradient descent (Liu
+//            and Wang 2016) of K particles on the same energy and mini-batch gradient, one shared
+//            mini-batch per iteration, RBF kernel with the median-heuristic bandwidth in the
+//            space whitened by the Laplace precision; the particles are clustered into modes.
 // The curvature of point-to-point: re-pairing lets a source point slide along the reference
 // surface at no cost, so the curvature of the nearest-neighbour objective is that of the
 // distance to the surface, J^T n n^T J (Pottmann and Hofer 2003), not the J^T J of pairs held
@@ -41,12 +45,13 @@
 
 namespace sgdicp {
 
-enum class UncertaintyType { none, laplace, sgld };
+enum class UncertaintyType { none, laplace, sgld, svgd };
 
-inline constexpr std::array<EnumName<UncertaintyType>, 3> kUncertaintyNames{{
+inline constexpr std::array<EnumName<UncertaintyType>, 4> kUncertaintyNames{{
     {UncertaintyType::none, "none"},
     {UncertaintyType::laplace, "laplace"},
     {UncertaintyType::sgld, "sgld"},
+    {UncertaintyType::svgd, "svgd"},
 }};
 constexpr const auto& enum_names(UncertaintyType) {
   return kUncertaintyNames;
@@ -68,6 +73,16 @@ struct UncertaintySettings {
   std::size_t thinning = 5;
   /// sgld: the step eps, as the contraction per iteration along the stiffest axis (unitless).
   double step = 0.1;
+  /// svgd: particles K (measured: docs/uncertainty.md).
+  std::size_t particles = 32;
+  /// svgd: Adam iterations on the Stein direction, each on one mini-batch shared by all particles.
+  std::size_t svgd_iterations = 50;
+  /// svgd: Adam's last step, in posterior standard deviations (whitened units); the step decays
+  /// geometrically from kSvgdFirstStep * svgd_spread (the scale of the initial cloud) to this.
+  double svgd_step = 0.05;
+  /// svgd: the initial particles' spread around the estimate, in Laplace standard deviations
+  /// (the Laplace covariance inflated by its square); wide values reach other modes.
+  double svgd_spread = 3.0;
   /// Temper the likelihood by the measured correlation factor kappa (false: residuals treated
   /// as independent, what the peers report).
   bool temper = true;
@@ -99,12 +114,40 @@ struct UncertaintyProblem {
   PoseVector theta_init = PoseVector::Zero();  ///< scaled: the centre of the prior
 };
 
-/// Fills covariance, covariance_se3 (and for sgld samples, sample_mean) of `result` for the
-/// scaled point estimate theta_hat, after kPolishSteps Gauss-Newton steps over every pair that
+/// Fills covariance, covariance_se3 (sgld, svgd: samples, sample_mean; svgd: modes) of `result` for
+/// the scaled point estimate theta_hat, after kPolishSteps Gauss-Newton steps over every pair that
 /// bring it to the full-data optimum; returns that optimum (scaled), the pose to report.
 [[nodiscard]] PoseVector estimate_uncertainty(const UncertaintyProblem& problem,
                                               const UncertaintySettings& settings,
                                               PoseVector theta_hat, RegistrationResult& result);
+
+/// The energy gradients of every particle (whitened) for one iteration: fills grads[i] for z[i].
+using ParticleGradients =
+    std::function<void(const std::vector<PoseVector>& z, std::vector<PoseVector>& grads)>;
+
+/// Stein variational gradient descent (Liu and Wang 2016, Algorithm 1) with Adam: `iterations`
+/// steps along phi(z_i) = 1/K sum_j [k(z_j, z_i) (-grad U(z_j)) + grad_{z_j} k(z_j, z_i)], RBF
+/// kernel k = exp(-|z_j - z_i|^2 / h), h = med^2 / log(K + 1) (the median of the pairwise
+/// squared distances). Adam's step decays geometrically from step_first to step_last. With one
+/// particle the kernel term vanishes: plain Adam descent on U.
+[[nodiscard]] std::vector<PoseVector> stein_descent(std::vector<PoseVector> z,
+                                                    const ParticleGradients& energy_gradients,
+                                                    std::size_t iterations, double step_first,
+                                                    double step_last);
+
+/// The particles grouped by single linkage (connected components of the pairs closer than
+/// `link`, whitened units), largest group first, ties by their first particle: deterministic.
+[[nodiscard]] std::vector<std::vector<std::size_t>> particle_modes(const std::vector<PoseVector>& z,
+                                                                   double link);
+
+/// svgd: particles closer than this (whitened units, posterior standard deviations) belong to
+/// one mode (a 6-D Gaussian's particles lie within 4.1 of its centre with 99 % probability) ...
+inline constexpr double kModeLinkDistance = 5.0;
+/// ... and so do particles closer than this fraction of the kernel's length sqrt(h): the kernel
+/// hardly tells them apart (k > 0.94), so they share their gradients and move as one group.
+inline constexpr double kModeLinkBandwidth = 0.25;
+/// svgd: Adam's first step as a fraction of the initial spread.
+inline constexpr double kSvgdFirstStep = 0.2;
 
 /// Gauss-Newton steps over every pair before the covariance (measured: 2 reach the optimum).
 inline constexpr int kPolishSteps = 2;

@@ -131,6 +131,8 @@ class UncertaintyType(enum.Enum):
     """inverse Gauss-Newton matrix at the optimum times the residual variance"""
     sgld = 2
     """Bayesian ICP: pre-conditioned stochastic gradient Langevin samples"""
+    svgd = 3
+    """Stein ICP: Stein variational gradient descent particles, clustered into modes"""
 
 
 class Distance:
@@ -282,8 +284,9 @@ class UncertaintySettings:
 
     method: UncertaintyType
     """Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the residual
-    variance) or sgld (Bayesian ICP: Langevin samples) (UncertaintyType or one of its names).
-    Keyword uncertainty=. Default UncertaintyType.none.
+    variance), sgld (Bayesian ICP: Langevin samples) or svgd (Stein ICP: particles, clustered
+    into modes) (UncertaintyType or one of its names). Keyword uncertainty=. Default
+    UncertaintyType.none.
     """
     samples: int
     """sgld: samples kept, in [2, 1000000]. Keyword uncertainty_samples=. Default 200."""
@@ -296,6 +299,21 @@ class UncertaintySettings:
     step: float
     """sgld: step size, as the contraction per iteration along the stiffest axis, in [0.0001, 1].
     Keyword sgld_step=. Default 0.1.
+    """
+    particles: int
+    """svgd: particles K, in [1, 10000]. Keyword particles=. Default 32."""
+    svgd_iterations: int
+    """svgd: iterations, one mini-batch shared by every particle each, in [1, 1000000]. Keyword
+    svgd_iterations=. Default 50.
+    """
+    svgd_step: float
+    """svgd: Adam's last step (it decays geometrically from a fifth of the initial spread),
+    posterior std in [0.0001, 10]. Keyword svgd_step=. Default 0.05.
+    """
+    svgd_spread: float
+    """svgd: spread of the initial particles around the estimate, in Laplace standard deviations
+    (wide values reach other modes), posterior std in [0.001, 1000000000]. Keyword svgd_spread=.
+    Default 3.0.
     """
     temper: bool
     """Temper the likelihood by the measured correlation of the residuals (false: residuals treated
@@ -852,6 +870,20 @@ class Trace:
     def __len__(self) -> int: ...
 
 
+class PoseMode:
+    """One mode of the svgd particles (RegistrationResult.modes; docs/uncertainty.md)."""
+
+    @property
+    def weight(self) -> float:
+        """Fraction of the particles in this mode."""
+    @property
+    def mean(self) -> npt.NDArray[np.float64]:
+        """(6,) float64: mean theta = (x, y, z, roll, pitch, yaw), metres and radians."""
+    @property
+    def covariance(self) -> npt.NDArray[np.float64]:
+        """(6, 6) float64: covariance of theta in this mode, metres and radians."""
+
+
 class RegistrationResult:
     """What register() returns: the transform, why it stopped, the work done and the final inlier
     statistics (every field of the C++ RegistrationResult, plus the non-finite rows dropped and
@@ -961,8 +993,8 @@ class RegistrationResult:
     @property
     def covariance(self) -> npt.NDArray[np.float64]:
         """(6, 6) float64: covariance of theta = (x, y, z, roll, pitch, yaw) of T_reference_source
-        (R = Rz(yaw) Ry(pitch) Rx(roll)), metres and radians; zeros unless uncertainty='laplace'
-        or 'sgld' (docs/uncertainty.md).
+        (R = Rz(yaw) Ry(pitch) Rx(roll)), metres and radians; zeros unless uncertainty='laplace',
+        'sgld' or 'svgd' (svgd: the heaviest mode's; docs/uncertainty.md).
         """
     @property
     def covariance_se3(self) -> npt.NDArray[np.float64]:
@@ -971,10 +1003,17 @@ class RegistrationResult:
         """
     @property
     def samples(self) -> npt.NDArray[np.float64]:
-        """(K, 6) float64: the SGLD samples of theta (as covariance); (0, 6) otherwise."""
+        """(K, 6) float64: the SGLD samples (sgld) or the particles (svgd) of theta (as covariance);
+        (0, 6) otherwise.
+        """
     @property
     def sample_mean(self) -> npt.NDArray[np.float64]:
         """(6,) float64: the mean of the samples (zeros without samples)."""
+    @property
+    def modes(self) -> list[PoseMode]:
+        """uncertainty='svgd': the modes of the particles (PoseMode), heaviest first (covariance is
+        the first's); empty otherwise.
+        """
 
 
 def register(
@@ -1090,8 +1129,9 @@ def register(
         voxel_size (0.0, [0, 1000000]), downsample_to (20000, [0, 4294967295]),
         robust_scaling (True), record_trace (False), uncertainty (UncertaintyType.none),
         uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
-        thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), temper (True),
-        block_size (Distance.scaled(0.1)).
+        thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), particles (32, [1, 10000]),
+        svgd_iterations (50, [1, 1000000]), svgd_step (0.05, [0.0001, 10]),
+        svgd_spread (3.0, [0.001, 1000000000]), temper (True), block_size (Distance.scaled(0.1)).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in

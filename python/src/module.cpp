@@ -147,6 +147,13 @@ struct Trace {
   py::array_t<double> cost;
 };
 
+/// One mode of the svgd particles (PoseMode), its arrays as numpy.
+struct Mode {
+  double weight = 0.0;
+  py::array_t<double> mean;        // (6,)
+  py::array_t<double> covariance;  // (6, 6)
+};
+
 struct Result {
   RegistrationResult fields;  ///< the C++ result (its trace moved into `trace`)
   py::array_t<double> T_reference_source;
@@ -158,6 +165,7 @@ struct Result {
   py::array_t<double> covariance_se3;  // (6, 6)
   py::array_t<double> samples;         // (K, 6)
   py::array_t<double> sample_mean;     // (6,)
+  py::list modes;                      // of Mode
 };
 
 Trace make_trace(const std::vector<TraceEntry>& entries) {
@@ -202,6 +210,12 @@ py::array_t<double> pose_rows(py::ssize_t rows, F&& at) {
   return out;
 }
 
+py::array_t<double> pose_vector_array(const Eigen::Matrix<double, 6, 1>& v) {
+  py::array_t<double> out(6);
+  for (py::ssize_t k = 0; k < 6; ++k) out.mutable_at(k) = v[k];
+  return out;
+}
+
 Result make_result(RegistrationResult r) {
   Result out;
   out.T_reference_source = array_from_matrix(r.T_reference_source);
@@ -212,8 +226,11 @@ Result make_result(RegistrationResult r) {
   out.samples = pose_rows(static_cast<py::ssize_t>(r.samples.size()), [&](auto i, auto k) {
     return r.samples[static_cast<std::size_t>(i)][k];
   });
-  out.sample_mean = py::array_t<double>(6);
-  for (py::ssize_t k = 0; k < 6; ++k) out.sample_mean.mutable_at(k) = r.sample_mean[k];
+  out.sample_mean = pose_vector_array(r.sample_mean);
+  for (const PoseMode& m : r.modes) {
+    out.modes.append(Mode{m.weight, pose_vector_array(m.mean),
+                          pose_rows(6, [&](auto i, auto k) { return m.covariance(i, k); })});
+  }
   r.samples.clear();
   out.fields = std::move(r);
   return out;
@@ -566,6 +583,18 @@ void bind_results(py::module_& m) {
         return "<sgd_icp.Trace of " + std::to_string(t.iteration.size()) + " iterations>";
       });
 
+  py::class_<Mode>(m, "PoseMode",
+                   "One mode of the svgd particles (RegistrationResult.modes; "
+                   "docs/uncertainty.md).")
+      .def_readonly("weight", &Mode::weight, "Fraction of the particles in this mode.")
+      .def_readonly("mean", &Mode::mean,
+                    "(6,) float64: mean theta = (x, y, z, roll, pitch, yaw), metres and radians.")
+      .def_readonly("covariance", &Mode::covariance,
+                    "(6, 6) float64: covariance of theta in this mode, metres and radians.")
+      .def("__repr__", [](const Mode& mode) {
+        return std::string(py::str("<sgd_icp.PoseMode weight {:.3g}>").format(mode.weight));
+      });
+
   py::class_<Result> result(
       m, "RegistrationResult",
       "What register() returns: the transform, why it stopped, the work done and "
@@ -586,14 +615,19 @@ void bind_results(py::module_& m) {
       .def_readonly("covariance", &Result::covariance,
                     "(6, 6) float64: covariance of theta = (x, y, z, roll, pitch, yaw) of "
                     "T_reference_source (R = Rz(yaw) Ry(pitch) Rx(roll)), metres and radians; "
-                    "zeros unless uncertainty='laplace' or 'sgld' (docs/uncertainty.md).")
+                    "zeros unless uncertainty='laplace', 'sgld' or 'svgd' (svgd: the heaviest "
+                    "mode's; docs/uncertainty.md).")
       .def_readonly("covariance_se3", &Result::covariance_se3,
                     "(6, 6) float64: the same in the tangent space of SE(3), xi = (rho, phi) "
                     "translation first, right perturbation T = T_reference_source @ Exp(xi).")
       .def_readonly("samples", &Result::samples,
-                    "(K, 6) float64: the SGLD samples of theta (as covariance); (0, 6) otherwise.")
+                    "(K, 6) float64: the SGLD samples (sgld) or the particles (svgd) of theta (as "
+                    "covariance); (0, 6) otherwise.")
       .def_readonly("sample_mean", &Result::sample_mean,
                     "(6,) float64: the mean of the samples (zeros without samples).")
+      .def_readonly("modes", &Result::modes,
+                    "uncertainty='svgd': the modes of the particles (PoseMode), heaviest first "
+                    "(covariance is the first's); empty otherwise.")
       .def("__repr__", [](const Result& r) {
         return std::string(py::str("<sgd_icp.RegistrationResult {}: {} iterations, {} points "
                                    "processed, inlier RMSE {:.4g} m ({:.1%} inliers), {:.1f} ms>")

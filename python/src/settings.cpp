@@ -244,9 +244,10 @@ std::string repr(const NeighborhoodSettings& n) {
 std::string repr(const UncertaintySettings& u) {
   return py::str(
              "UncertaintySettings(method=UncertaintyType.{}, samples={!r}, burn_in={!r}, "
-             "thinning={!r}, step={!r}, temper={!r}, block_size={})")
-      .format(to_string(u.method), u.samples, u.burn_in, u.thinning, u.step, u.temper,
-              repr(u.block_size));
+             "thinning={!r}, step={!r}, particles={!r}, svgd_iterations={!r}, svgd_step={!r}, "
+             "svgd_spread={!r}, temper={!r}, block_size={})")
+      .format(to_string(u.method), u.samples, u.burn_in, u.thinning, u.step, u.particles,
+              u.svgd_iterations, u.svgd_step, u.svgd_spread, u.temper, repr(u.block_size));
 }
 
 std::string cost_name(CostType t) {
@@ -478,6 +479,8 @@ void bind_enums(py::module_& m) {
              "inverse Gauss-Newton matrix at the optimum times the residual variance")
       .value("sgld", UncertaintyType::sgld,
              "Bayesian ICP: pre-conditioned stochastic gradient Langevin samples")
+      .value("svgd", UncertaintyType::svgd,
+             "Stein ICP: Stein variational gradient descent particles, clustered into modes")
       .finalize();
 }
 
@@ -497,6 +500,10 @@ void bind_uncertainty(py::module_& m) {
   def_count(u, "burn_in", &UncertaintySettings::burn_in, "");
   def_count(u, "thinning", &UncertaintySettings::thinning, "");
   u.def_readwrite("step", &UncertaintySettings::step, "");
+  def_count(u, "particles", &UncertaintySettings::particles, "");
+  def_count(u, "svgd_iterations", &UncertaintySettings::svgd_iterations, "");
+  u.def_readwrite("svgd_step", &UncertaintySettings::svgd_step, "");
+  u.def_readwrite("svgd_spread", &UncertaintySettings::svgd_spread, "");
   def_flag(u, "temper", &UncertaintySettings::temper, "");
   def_distance(u, "block_size", &UncertaintySettings::block_size, "");
   def_value_methods(u);
