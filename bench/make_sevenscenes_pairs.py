@@ -16,7 +16,10 @@ Pairs with a repeated depth frame (byte-identical to the frame before it, while 
 moves) are skipped: for them the data's answer is not the pose difference.
 
 Usage: python3 bench/make_sevenscenes_pairs.py [--data DIR] [--out DIR] [--offsets 1,3,5]
-       [--pairs-per-offset 20]
+       [--pairs-per-offset 20 | N1,N2,...] [--name FILE]
+The paper's Table I on this sequence (eval/reproduce.py): --offsets 1,3,10
+--pairs-per-offset 600,100,100 --name sevenscenes_table1.txt (every consecutive pair, 100 pairs 3
+and 10 frames apart).
 Needs numpy, and the sgd_icp package (pip install .) or Pillow (pip install pillow): with the
 package the frames are read by its depth-image reader (docs/depth.md), else by Pillow and numpy
 (the same points; tests/python/test_depth.py compares the two).
@@ -97,13 +100,15 @@ def write_ply(path: Path, points: np.ndarray) -> None:
         f.write(np.ascontiguousarray(points, dtype="<f4").tobytes())
 
 
-def choose_pairs(count: int, offsets: list[int], per_offset: int, repeated: set[int]) -> list[tuple[int, int]]:
-    """(reference, source) pairs OFFSET apart, starts spread evenly, none with a repeated frame."""
+def choose_pairs(count: int, offsets: list[int], per_offset: list[int],
+                 repeated: set[int]) -> list[tuple[int, int]]:
+    """(reference, source) pairs OFFSET apart (per_offset[k] of offset k), starts spread evenly,
+    none with a repeated frame."""
     pairs = []
-    for offset in offsets:
+    for offset, wanted in zip(offsets, per_offset):
         last_start = count - 1 - offset
-        for k in range(per_offset):
-            start = round(k * last_start / max(per_offset - 1, 1))
+        for k in range(wanted):
+            start = round(k * last_start / max(wanted - 1, 1))
             while start <= last_start and (start in repeated or start + offset in repeated):
                 start += 1
             if start <= last_start and (start, start + offset) not in pairs:
@@ -117,13 +122,20 @@ def main() -> None:
     default_out = Path(os.environ["SGDICP_GENERATED_DATA"]) if os.environ.get("SGDICP_GENERATED_DATA") else DEFAULT_OUT
     parser.add_argument("--out", type=Path, default=default_out)
     parser.add_argument("--offsets", default="1,3,5")
-    parser.add_argument("--pairs-per-offset", type=int, default=20)
+    parser.add_argument("--pairs-per-offset", default="20",
+                        help="pairs per offset: one count for all, or one per offset (comma-separated)")
+    parser.add_argument("--name", default=PAIRS_NAME, help="file name of the pairs file in --out")
     parser.add_argument("--frames", type=int, default=600)
     args = parser.parse_args()
 
     offsets = [int(x) for x in args.offsets.split(",")]
+    per_offset = [int(x) for x in args.pairs_per_offset.split(",")]
+    if len(per_offset) == 1:
+        per_offset *= len(offsets)
+    if len(per_offset) != len(offsets):
+        parser.error("--pairs-per-offset: one count, or one per offset")
     repeated = repeated_frames(args.data, args.frames)
-    pairs = choose_pairs(args.frames, offsets, args.pairs_per_offset, repeated)
+    pairs = choose_pairs(args.frames, offsets, per_offset, repeated)
     intrinsics = read_intrinsics(args.data)
     args.out.mkdir(parents=True, exist_ok=True)
     for index in sorted({i for pair in pairs for i in pair}):
@@ -141,8 +153,8 @@ def main() -> None:
         T = np.linalg.inv(read_pose(args.data, reference)) @ read_pose(args.data, source)
         numbers = " ".join(f"{x:.9g}" for x in T[:3].reshape(-1))
         lines.append(f"{frame_name(source, 'ply')} {frame_name(reference, 'ply')} {numbers}")
-    (args.out / PAIRS_NAME).write_text("\n".join(lines) + "\n")
-    print(f"{len(pairs)} pairs ({len(repeated)} repeated frames skipped) -> {args.out / PAIRS_NAME}")
+    (args.out / args.name).write_text("\n".join(lines) + "\n")
+    print(f"{len(pairs)} pairs ({len(repeated)} repeated frames skipped) -> {args.out / args.name}")
 
 
 if __name__ == "__main__":
