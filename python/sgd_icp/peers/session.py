@@ -42,6 +42,7 @@ DEFAULT_VOXEL_M = {
     "eth_kinect_map_moved_copies": 0.02,
     "pcl_bunny": 0.002,
     "sevenscenes_redkitchen": 0.02,  # Kinect frames (bench/make_sevenscenes_pairs.py)
+    "sevenscenes_table1": 0.02,  # eval/reproduce.py's sevenscenes_table1_Napart pairs files
 }
 
 
@@ -57,7 +58,12 @@ class PeerSettings:
     default_voxel_m: float = 0.25  # for a pairs file not in voxel_m
 
     def voxel_for(self, pairs_file: str) -> float:
-        return self.voxel_m.get(pairs_file, self.default_voxel_m)
+        """The voxel of a pairs file stem: its entry, else the longest entry it starts with (the
+        7-Scenes Table I files sevenscenes_table1_1apart, ...), else default_voxel_m."""
+        if pairs_file in self.voxel_m:
+            return self.voxel_m[pairs_file]
+        prefixes = [k for k in self.voxel_m if pairs_file.startswith(k)]
+        return self.voxel_m[max(prefixes, key=len)] if prefixes else self.default_voxel_m
 
 
 @dataclass
