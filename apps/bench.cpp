@@ -2,6 +2,7 @@
 // and prints per-pair errors and times and a summary.
 #include <unistd.h>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -64,7 +65,52 @@ struct Row {
   bool converged = false;
   bool degenerate = false;
   std::string stop_reason;
+  std::string source_path, reference_path;  // as the pairs file gives them
 };
+
+std::string number(double v, int digits) {
+  std::array<char, 32> text{};
+  std::snprintf(text.data(), text.size(), "%.*g", digits, v);
+  return text.data();
+}
+
+// The --csv columns, each name beside how its value is written: the header and the rows cannot
+// drift apart.
+struct CsvColumn {
+  const char* name;
+  std::string (*value)(const Row&);
+};
+const std::array<CsvColumn, 20> kCsvColumns{{
+    {"pairs_file", [](const Row& r) { return r.pairs_file; }},
+    {"line", [](const Row& r) { return std::to_string(r.line); }},
+    {"source", [](const Row& r) { return r.source_path; }},
+    {"reference", [](const Row& r) { return r.reference_path; }},
+    {"method", [](const Row& r) { return r.method; }},
+    {"repeat", [](const Row& r) { return std::to_string(r.repeat); }},
+    {"translation_error_m", [](const Row& r) { return number(r.t_err, 9); }},
+    {"rotation_error_euler_rad", [](const Row& r) { return number(r.r_err_sum, 9); }},
+    {"rotation_error_geodesic_deg", [](const Row& r) { return number(r.r_err_geo_deg, 9); }},
+    {"initial_translation_error_m", [](const Row& r) { return number(r.init_t_err, 9); }},
+    {"initial_rotation_error_deg", [](const Row& r) { return number(r.init_r_geo_deg, 9); }},
+    {"build_ms", [](const Row& r) { return number(r.build_ms, 6); }},
+    {"align_ms", [](const Row& r) { return number(r.align_ms, 6); }},
+    {"time_ms", [](const Row& r) { return number(r.build_ms + r.align_ms, 6); }},
+    {"iterations", [](const Row& r) { return std::to_string(r.iterations); }},
+    {"points_processed", [](const Row& r) { return std::to_string(r.points); }},
+    {"source_points", [](const Row& r) { return std::to_string(r.source_points); }},
+    {"converged", [](const Row& r) { return std::string(r.converged ? "1" : "0"); }},
+    {"stop_reason", [](const Row& r) { return r.stop_reason; }},
+    {"degenerate", [](const Row& r) { return std::string(r.degenerate ? "1" : "0"); }},
+}};
+
+void write_csv_line(std::FILE* csv, const Row* row) {
+  std::string line;
+  for (const auto& column : kCsvColumns) {
+    if (!line.empty()) line += ',';
+    line += row ? column.value(*row) : std::string(column.name);
+  }
+  std::fprintf(csv, "%s\n", line.c_str());
+}
 
 std::vector<double> parse_numbers(const std::string& text, const std::string& what) {
   std::vector<double> out;
@@ -264,11 +310,7 @@ void run(const BenchOptions& o) {
     csv = std::fopen(o.csv.c_str(), "w");
     if (!csv) throw IoError(o.csv + ": cannot open for writing");
     csv_guard.reset(csv);
-    std::fprintf(csv,
-                 "pairs_file,line,source,reference,method,repeat,translation_error_m,"
-                 "rotation_error_euler_rad,rotation_error_geodesic_deg,initial_translation_error_m,"
-                 "initial_rotation_error_deg,build_ms,align_ms,time_ms,iterations,points_processed,"
-                 "source_points,converged,stop_reason,degenerate\n");
+    write_csv_line(csv, nullptr);  // the header
   }
 
   const bool tty = isatty(STDERR_FILENO) != 0;
@@ -310,6 +352,8 @@ void run(const BenchOptions& o) {
     row.line = pair.line;
     row.source = pair.source.filename().string();
     row.reference = pair.reference.filename().string();
+    row.source_path = pair.source.string();
+    row.reference_path = pair.reference.string();
     row.method = m.name;
     row.repeat = rep;
     row.t_err = translation_error(r.T_reference_source, T_gt);
@@ -339,16 +383,7 @@ void run(const BenchOptions& o) {
                 fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
                 row.converged ? "yes" : "no");
     std::fflush(stdout);
-    if (csv) {
-      const RegistrationPair& pair = jobs[j].second;
-      std::fprintf(
-          csv, "%s,%zu,%s,%s,%s,%zu,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%zu,%zu,%zu,%d,%s,%d\n",
-          row.pairs_file.c_str(), row.line, pair.source.string().c_str(),
-          pair.reference.string().c_str(), row.method.c_str(), row.repeat, row.t_err, row.r_err_sum,
-          row.r_err_geo_deg, row.init_t_err, row.init_r_geo_deg, row.build_ms, row.align_ms,
-          row.build_ms + row.align_ms, row.iterations, row.points, row.source_points,
-          row.converged ? 1 : 0, row.stop_reason.c_str(), row.degenerate ? 1 : 0);
-    }
+    if (csv) write_csv_line(csv, &row);
     rows.push_back(std::move(row));
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

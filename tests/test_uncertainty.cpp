@@ -195,20 +195,29 @@ TEST(Laplace, NoneLeavesTheCovarianceEmpty) {
   EXPECT_EQ(r.uncertainty_pairs, 0U);
 }
 
+// Two runs with the same seed give the same `count` samples and covariance; the next seed gives
+// other samples.
+void expect_reproducible_samples(const PointCloud& source, const PointCloud& reference,
+                                 SgdSettings s, std::size_t count) {
+  const RegistrationResult a = align(source, reference, s);
+  const RegistrationResult b = align(source, reference, s);
+  ASSERT_EQ(a.samples.size(), count);
+  ASSERT_EQ(b.samples.size(), count);
+  for (std::size_t i = 0; i < a.samples.size(); ++i) EXPECT_EQ(a.samples[i], b.samples[i]);
+  EXPECT_EQ(a.covariance, b.covariance);
+  s.seed += 1;
+  const RegistrationResult c = align(source, reference, s);
+  ASSERT_EQ(c.samples.size(), count);
+  EXPECT_NE(a.samples.front(), c.samples.front());
+  EXPECT_NE(a.samples.back(), c.samples.back());
+}
+
 TEST(Sgld, SameSeedSameSamplesOtherSeedOtherSamples) {
   const PointCloud reference = box_points(2000, 9);
   const PointCloud source = noisy_source(reference, kTgt, kNoise_m, 10);
   SgdSettings s = uncertainty_settings(UncertaintyType::sgld, true);
   s.uncertainty.samples = 50;
-  const RegistrationResult a = align(source, reference, s);
-  const RegistrationResult b = align(source, reference, s);
-  ASSERT_EQ(a.samples.size(), 50U);
-  ASSERT_EQ(b.samples.size(), 50U);
-  for (std::size_t i = 0; i < a.samples.size(); ++i) EXPECT_EQ(a.samples[i], b.samples[i]);
-  EXPECT_EQ(a.covariance, b.covariance);
-  s.seed += 1;
-  const RegistrationResult c = align(source, reference, s);
-  EXPECT_NE(a.samples.back(), c.samples.back());
+  expect_reproducible_samples(source, reference, s, 50);
 }
 
 // With the point-to-plane cost the chain samples the energy whose curvature Laplace inverts.
@@ -310,17 +319,7 @@ TEST(Svgd, CovarianceIsSymmetricPositiveDefiniteAndModesAreReported) {
 TEST(Svgd, SameSeedSameParticlesOtherSeedOtherParticles) {
   const PointCloud reference = box_points(2000, 23);
   const PointCloud source = noisy_source(reference, kTgt, kNoise_m, 24);
-  SgdSettings s = svgd_settings(16, CostType::point_to_point);
-  const RegistrationResult a = align(source, reference, s);
-  const RegistrationResult b = align(source, reference, s);
-  ASSERT_EQ(a.samples.size(), 16U);
-  ASSERT_EQ(b.samples.size(), 16U);
-  for (std::size_t i = 0; i < a.samples.size(); ++i) EXPECT_EQ(a.samples[i], b.samples[i]);
-  EXPECT_EQ(a.covariance, b.covariance);
-  s.seed += 1;
-  const RegistrationResult c = align(source, reference, s);
-  ASSERT_EQ(c.samples.size(), 16U);
-  EXPECT_NE(a.samples.front(), c.samples.front());
+  expect_reproducible_samples(source, reference, svgd_settings(16, CostType::point_to_point), 16);
 }
 
 // A non-quadratic energy whose gradient changes every call (as a mini-batch's does).

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -205,97 +206,34 @@ std::string repr(const Distance& d) {
          std::string(py::repr(py::float_(d.value))) + ")";
 }
 
-std::string optimizer_name(OptimizerType t) {
-  return t == OptimizerType::gauss_newton ? "gauss_newton" : std::string(to_string(t));
+// A value as Python writes it, for repr and "Default X." (which the package tests evaluate):
+// enums as Class.member, arrays as tuples.
+std::string python_literal(const py::object& value) {
+  static const py::object enum_type = py::module_::import("enum").attr("Enum");
+  if (py::isinstance(value, enum_type)) {
+    return py::str("{}.{}").format(py::type::handle_of(value).attr("__name__"), value.attr("name"));
+  }
+  if (py::hasattr(value, "tolist")) return py::repr(py::tuple(value.attr("tolist")()));
+  return py::repr(value);
 }
 
-std::string repr(const OptimizerSettings& o) {
-  return py::str(
-             "OptimizerSettings(type=OptimizerType.{}, learning_rate={!r}, momentum={!r}, "
-             "beta1={!r}, beta2={!r}, rms_decay={!r}, epsilon={!r}, hessian_decay={!r}, "
-             "damping={!r})")
-      .format(optimizer_name(o.type), o.learning_rate, o.momentum, o.beta1, o.beta2, o.rms_decay,
-              o.epsilon, o.hessian_decay, o.damping);
+// "Class(attribute=value, ...)" over the properties the class binds, in binding order, so that a
+// new setting appears without a second hand-kept field list.
+std::string attributes_repr(const py::handle& self) {
+  static const py::object property = py::module_::import("builtins").attr("property");
+  const py::handle cls = py::type::handle_of(self);
+  std::string out = py::str(cls.attr("__name__")).cast<std::string>() + "(";
+  bool first = true;
+  for (const auto& item : cls.attr("__dict__").attr("items")()) {
+    const auto entry = item.cast<py::tuple>();
+    if (!py::isinstance(entry[1], property)) continue;
+    out += (first ? "" : ", ") + py::str(entry[0]).cast<std::string>() + "=" +
+           python_literal(self.attr(entry[0]));
+    first = false;
+  }
+  return out + ")";
 }
 
-std::string repr(const ConvergenceSettings& c) {
-  return py::str(
-             "ConvergenceSettings(window={!r}, chi2={!r}, max_path_efficiency={!r}, "
-             "translation_tolerance={!r}, rotation_tolerance={!r})")
-      .format(c.window, c.chi2, c.max_path_efficiency, c.translation_tolerance,
-              c.rotation_tolerance);
-}
-
-std::string repr(const RefinementSettings& r) {
-  return py::str(
-             "RefinementSettings(stages={!r}, step_decay={!r}, distance_factor={!r}, "
-             "min_distance={}, gauss_newton={!r})")
-      .format(r.stages, r.step_decay, r.distance_factor, repr(r.min_distance), r.gauss_newton);
-}
-
-std::string repr(const NeighborhoodSettings& n) {
-  return py::str(
-             "NeighborhoodSettings(k={!r}, num_threads={!r}, regularize={!r}, epsilon={!r}, "
-             "viewpoint=({!r}, {!r}, {!r}))")
-      .format(n.k, n.num_threads, n.regularize, n.epsilon, n.viewpoint.x(), n.viewpoint.y(),
-              n.viewpoint.z());
-}
-
-std::string repr(const UncertaintySettings& u) {
-  return py::str(
-             "UncertaintySettings(method=UncertaintyType.{}, samples={!r}, burn_in={!r}, "
-             "thinning={!r}, step={!r}, particles={!r}, svgd_iterations={!r}, svgd_step={!r}, "
-             "svgd_spread={!r}, temper={!r}, block_size={})")
-      .format(to_string(u.method), u.samples, u.burn_in, u.thinning, u.step, u.particles,
-              u.svgd_iterations, u.svgd_step, u.svgd_spread, u.temper, repr(u.block_size));
-}
-
-std::string cost_name(CostType t) {
-  std::string name(to_string(t));
-  std::replace(name.begin(), name.end(), '-', '_');
-  return name;
-}
-
-std::string kernel_name(KernelType t) {
-  std::string name(to_string(t));
-  std::replace(name.begin(), name.end(), '-', '_');
-  return name;
-}
-
-std::string repr(const SgdSettings& s) {
-  return py::str(
-             "Settings(batch_size={!r}, cap_batch_to_source={!r}, max_correspondence_distance={}, "
-             "optimizer={}, "
-             "convergence={}, refinement={}, cost=CostType.{}, coarse_cost=CostType.{}, "
-             "kernel=KernelType.{}, "
-             "kernel_scale={}, trim_ratio={!r}, neighborhood={}, scaling_origin=ScalingOrigin.{}, "
-             "max_iterations={!r}, seed={!r}, average_iterates={!r}, evaluation_points={!r}, "
-             "record_trace={!r}, check_degeneracy={!r}, robust_scaling={!r}, num_threads={!r}, "
-             "voxel_size_m={!r}, downsample_to={!r}, uncertainty={})")
-      .format(s.batch_size, s.cap_batch_to_source, repr(s.max_correspondence_distance),
-              repr(s.optimizer), repr(s.convergence), repr(s.refinement), cost_name(s.cost),
-              cost_name(s.coarse_cost), kernel_name(s.kernel), repr(s.kernel_scale), s.trim_ratio,
-              repr(s.neighborhood),
-              s.scaling_origin == ScalingOrigin::center ? "center" : "lower_corner",
-              s.max_iterations, s.seed, s.average_iterates, s.evaluation_points, s.record_trace,
-              s.check_degeneracy, s.robust_scaling, s.num_threads, s.voxel_size_m, s.downsample_to,
-              repr(s.uncertainty));
-}
-
-std::string repr(const BatchSettings& s) {
-  return py::str(
-             "BatchSettings(cost=CostType.{}, max_correspondence_distance={}, "
-             "kernel=KernelType.{}, kernel_scale={}, trim_ratio={!r}, max_iterations={!r}, "
-             "translation_tolerance={!r}, rotation_tolerance={!r}, initial_damping={!r}, "
-             "neighborhood={}, evaluation_points={!r}, check_degeneracy={!r}, "
-             "record_trace={!r}, robust_scaling={!r}, num_threads={!r}, voxel_size_m={!r}, "
-             "downsample_to={!r})")
-      .format(cost_name(s.cost), repr(s.max_correspondence_distance), kernel_name(s.kernel),
-              repr(s.kernel_scale), s.trim_ratio, s.max_iterations, s.translation_tolerance,
-              s.rotation_tolerance, s.initial_damping, repr(s.neighborhood), s.evaluation_points,
-              s.check_degeneracy, s.record_trace, s.robust_scaling, s.num_threads, s.voxel_size_m,
-              s.downsample_to);
-}
 // The attributes that the library's settings tables describe (settings.hpp) are bound with an
 // empty docstring here: document_attributes() sets each from its table entry (help, unit,
 // range, keyword, default), so that the text has one source. The others are written here.
@@ -308,7 +246,11 @@ void def_value_methods(py::class_<T>& c) {
           if (!py::isinstance<T>(b)) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
           return py::bool_(a == b.cast<const T&>());
         })
-      .def("__repr__", [](const T& a) { return repr(a); })
+      .def("__repr__",
+           [](const py::handle& a) {
+             if constexpr (std::is_same_v<T, Distance>) return repr(a.cast<const Distance&>());
+             return attributes_repr(a);
+           })
       .def("__copy__", [](const T& a) { return T(a); })
       .def(
           "__deepcopy__", [](const T& a, const py::handle&) { return T(a); }, "memo"_a);
@@ -789,15 +731,6 @@ std::string class_of(std::string_view field, std::string_view top) {
   if (part == "refinement") return "RefinementSettings";
   if (part == "uncertainty") return "UncertaintySettings";
   return "NeighborhoodSettings";
-}
-
-// A value as Python writes it, for "Default X." (which the package tests evaluate).
-std::string python_literal(const py::object& value) {
-  static const py::object enum_type = py::module_::import("enum").attr("Enum");
-  if (py::isinstance(value, enum_type)) {
-    return py::str("{}.{}").format(py::type::handle_of(value).attr("__name__"), value.attr("name"));
-  }
-  return py::repr(value);
 }
 
 // The docstring of a setting's attribute: the table's help, range and unit, and the default read

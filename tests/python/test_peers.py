@@ -193,3 +193,16 @@ def test_small_gicp_runs_in_its_worker(pairs_file):
     assert o.status == "ok", o.note
     assert 0 < o.time_ms < o.call_ms and o.iterations >= 1 and o.source_points_used == 4000
     assert o.translation_error_m < 0.01 and o.rotation_error_geodesic_deg < 0.5
+
+
+def test_voxel_table_prefixes_and_warns_once_for_an_unknown_pairs_file():
+    settings = peers.PeerSettings()
+    assert settings.voxel_for("pcl_bunny") == 0.002
+    assert settings.voxel_for("sevenscenes_table1_3apart") == 0.02  # longest prefix
+    with pytest.warns(UserWarning, match="no voxel size for the pairs file 'my_scans'"):
+        assert settings.voxel_for("my_scans") == settings.default_voxel_m
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert settings.voxel_for("my_scans") == settings.default_voxel_m  # once per stem

@@ -260,3 +260,26 @@ def test_settings_pickle_to_equal_copies():
     changed = pickle.loads(pickle.dumps(sgd_icp.Settings(seed=3)))
     changed.seed = 4
     assert changed != sgd_icp.Settings(seed=3)
+
+
+def _properties(cls):
+    return [name for name, value in vars(cls).items() if isinstance(value, property)]
+
+
+def test_repr_shows_every_attribute_with_its_value():
+    # The repr is made from the bound attributes: a new setting cannot be left out of it.
+    import sgd_icp
+
+    s = sgd_icp.Settings(seed=7, optimizer="rmsprop", uncertainty="sgld")
+    s.neighborhood.viewpoint = (1.0, 2.0, 3.0)
+    b = sgd_icp.BatchSettings.gicp(max_iterations=30)
+    for obj in (s, s.optimizer, s.convergence, s.refinement, s.neighborhood, s.uncertainty, b):
+        text = repr(obj)
+        assert text.startswith(type(obj).__name__ + "(")
+        for name in _properties(type(obj)):
+            assert text.count(f"{name}=") >= 1, (name, text)
+    text = repr(s)
+    assert "seed=7" in text and "type=OptimizerType.rmsprop" in text
+    assert "method=UncertaintyType.sgld" in text and "viewpoint=(1.0, 2.0, 3.0)" in text
+    assert "cost=CostType.plane_to_plane" in repr(b) and "max_iterations=30" in repr(b)
+    assert repr(sgd_icp.Distance.metres(0.5)) == "Distance.metres(0.5)"

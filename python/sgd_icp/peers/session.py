@@ -20,6 +20,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -56,14 +57,23 @@ class PeerSettings:
     threads: int = os.cpu_count() or 1  # of small_gicp's multi-threaded variants
     voxel_m: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_VOXEL_M))
     default_voxel_m: float = 0.25  # for a pairs file not in voxel_m
+    _warned: set[str] = field(default_factory=set, repr=False, compare=False)
 
     def voxel_for(self, pairs_file: str) -> float:
         """The voxel of a pairs file stem: its entry, else the longest entry it starts with (the
-        7-Scenes Table I files sevenscenes_table1_1apart, ...), else default_voxel_m."""
+        7-Scenes Table I files sevenscenes_table1_1apart, ...), else default_voxel_m with a
+        warning (once per stem): a 0.25 m grid on a small scene would be an unfair peer."""
         if pairs_file in self.voxel_m:
             return self.voxel_m[pairs_file]
         prefixes = [k for k in self.voxel_m if pairs_file.startswith(k)]
-        return self.voxel_m[max(prefixes, key=len)] if prefixes else self.default_voxel_m
+        if prefixes:
+            return self.voxel_m[max(prefixes, key=len)]
+        if pairs_file not in self._warned:
+            self._warned.add(pairs_file)
+            warnings.warn(f"peers: no voxel size for the pairs file '{pairs_file}'; the peers "
+                          f"downsample it with {self.default_voxel_m} m (add it to voxel_m)",
+                          stacklevel=2)
+        return self.default_voxel_m
 
 
 @dataclass
