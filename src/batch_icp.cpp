@@ -343,8 +343,8 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::eager);
   const detail::PairFrame frame(reference);
   const double voxel_m = detail::source_voxel_size(reference, settings.voxel_size_m);
-  const detail::PreparedSource src(source, voxel_m, frame.origin_m(), settings.cost,
-                                   settings.neighborhood, BatchPairing::kMinPairs,
+  const detail::PreparedSource src(source, voxel_m, settings.num_threads, frame.origin_m(),
+                                   settings.cost, settings.neighborhood, BatchPairing::kMinPairs,
                                    "the minimum of");
   RegistrationResult result;
   detail::record_clouds(result, src.cloud(), voxel_m, reference);

@@ -376,55 +376,37 @@ class VoxelGrid {
   double size_;
 };
 
-// One counting pass of the voxel size search: the occupied voxels of a grid and each point's
-// voxel, so that the pass which settles the size also serves the thinning (accumulate_voxels)
-// instead of hashing every point again (6 % of a default registration on a Kinect frame).
-struct CountedGrid {
-  VoxelGrid grid;
-  VoxelSlots slots;
-  std::vector<std::uint32_t> point_slots;  // empty when the count passed its limit
+// What a counting pass keeps of a voxel: nothing but its key (VoxelTable).
+struct Counted {
+  void add(const Eigen::Vector3f& /*p*/) {}
+  Counted& operator+=(const Counted& /*other*/) { return *this; }
 };
-
-// Counting stops once above `limit` (a grid far too fine); `expected` sizes the table; the
-// points' slots are kept when `record`.
-CountedGrid count_voxels(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
-                         std::size_t limit, bool record) {
-  CountedGrid counted{grid, VoxelSlots(expected), {}};
-  if (record) counted.point_slots.reserve(cloud.size());
-  for (const Eigen::Vector3f& p : cloud.points) {
-    const std::size_t slot = counted.slots.slot(grid.key(p));
-    if (record) counted.point_slots.push_back(static_cast<std::uint32_t>(slot));
-    if (counted.slots.size() > limit) {
-      counted.point_slots.clear();
-      break;
-    }
-  }
-  return counted;
-}
 
 // What voxel_downsample keeps of a voxel: the sum of its points, for their centroid.
 struct Centroid {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   double count = 0.0;
 
-  explicit Centroid(const VoxelKey& /*key*/) {}
   void add(const Eigen::Vector3f& p) {
     sum += p.cast<double>();
     count += 1.0;
+  }
+  Centroid& operator+=(const Centroid& other) {
+    sum += other.sum;
+    count += other.count;
+    return *this;
   }
   // Rounding is monotone, so the float centroid stays within its points' range: in their voxel.
   [[nodiscard]] Eigen::Vector3f centroid() const { return (sum / count).cast<float>(); }
 };
 
 // What voxel_downsample_with_surfaces keeps: also the sum of the outer products (xx xy xz yy yz
-// zz) and the voxel's key, to find its neighbours. Sums of raw (uncentred) products add across
-// voxels; centring them at the end costs ~1e-16 |mean|^2, far below the float-resolution floor
-// under which describe_covariance calls a spread noise.
+// zz). Sums of raw (uncentred) products add across voxels; centring them at the end costs
+// ~1e-16 |mean|^2, far below the float-resolution floor under which describe_covariance calls a
+// spread noise.
 struct Moments : Centroid {
   std::array<double, 6> outer{};
-  VoxelKey key;
 
-  explicit Moments(const VoxelKey& k) : Centroid(k), key(k) {}
   void add(const Eigen::Vector3f& p) {
     Centroid::add(p);
     const double x = p.x();
@@ -437,39 +419,143 @@ struct Moments : Centroid {
     outer[4] += y * z;
     outer[5] += z * z;
   }
+  Moments& operator+=(const Moments& other) {
+    Centroid::operator+=(other);
+    for (std::size_t k = 0; k < 6; ++k) outer[k] += other.outer[k];
+    return *this;
+  }
 };
 
-// Every occupied voxel of the grid, in the order of its first point, with what Voxel keeps.
+// Every occupied voxel of a grid, in the order of its first point, with what Voxel keeps; the
+// points' slots when recorded (the voxel size search's settling pass, reused by the thinning
+// instead of hashing every point again: 6 % of a default registration on a Kinect frame).
 template <class Voxel>
 struct VoxelTable {
   VoxelSlots slots;
-  std::vector<Voxel> voxels;
+  std::vector<VoxelKey> keys;  // by slot
+  std::vector<Voxel> voxels;   // by slot
+  std::vector<std::uint32_t> point_slots;
+  bool over_limit = false;  // a counting pass stopped above its limit: keys and voxels partial
 };
 
+// The passes over raw points (the size search's counting, the thinning) hash and sum two fixed
+// halves of a cloud and merge them in order: with two threads the halves run at once, one
+// thread runs the same halves in turn, so first-seen order and every sum are the same for any
+// thread count. Smaller clouds are one part.
+constexpr std::size_t kMinPointsToSplit = std::size_t{1} << 15;
+
+struct PointRange {
+  std::size_t begin;
+  std::size_t end;
+};
+
+std::vector<PointRange> point_parts(std::size_t n) {
+  if (n < kMinPointsToSplit) return {{0, n}};
+  return {{0, n / 2}, {n / 2, n}};
+}
+
+// body(part) for every part, on up to `threads` threads (0 = every core).
+template <class Body>
+void for_parts(std::size_t parts, std::size_t threads, const Body& body) {
+  parallel_chunks(parts, std::min(resolve_thread_count(threads), parts),
+                  [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t part = begin; part < end; ++part) body(part);
+                  });
+}
+
+// The table of the points in `range`; stops once it holds more than `limit` voxels. `expected`
+// sizes the hash table.
 template <class Voxel>
-VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m) {
-  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
-  VoxelTable<Voxel> table{VoxelSlots(cloud.size() / 8), {}};
-  for (const Eigen::Vector3f& p : cloud.points) {
+VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, PointRange range,
+                           std::size_t expected, std::size_t limit, bool record) {
+  VoxelTable<Voxel> t{VoxelSlots(expected), {}, {}, {}};
+  if (record) t.point_slots.reserve(range.end - range.begin);
+  for (std::size_t i = range.begin; i < range.end; ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
     const VoxelKey key = grid.key(p);
-    const std::size_t slot = table.slots.slot(key);
-    if (slot == table.voxels.size()) table.voxels.emplace_back(key);
-    table.voxels[slot].add(p);
+    const std::size_t slot = t.slots.slot(key);
+    if (slot == t.voxels.size()) {
+      if (slot == limit) {
+        t.over_limit = true;
+        break;
+      }
+      t.keys.push_back(key);
+      t.voxels.emplace_back();
+    }
+    t.voxels[slot].add(p);
+    if (record) t.point_slots.push_back(static_cast<std::uint32_t>(slot));
+  }
+  if (t.over_limit) t.point_slots.clear();
+  return t;
+}
+
+// Appends `later` (the table of the points after those of `t`) to `t`: its voxels in its own
+// first-seen order, sums added after t's, point slots renumbered.
+template <class Voxel>
+void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t limit) {
+  t.over_limit = t.over_limit || later.over_limit;
+  std::vector<std::uint32_t> renumbered(later.voxels.size());
+  for (std::size_t s = 0; s < later.voxels.size() && !t.over_limit; ++s) {
+    const std::size_t slot = t.slots.slot(later.keys[s]);
+    if (slot == t.voxels.size()) {
+      t.over_limit = slot == limit;
+      t.keys.push_back(later.keys[s]);
+      t.voxels.push_back(later.voxels[s]);
+    } else {
+      t.voxels[slot] += later.voxels[s];
+    }
+    renumbered[s] = static_cast<std::uint32_t>(slot);
+  }
+  if (t.over_limit) {
+    t.point_slots.clear();
+    return;
+  }
+  for (const std::uint32_t s : later.point_slots) t.point_slots.push_back(renumbered[s]);
+}
+
+// The table of every point of the cloud, made in its parts on up to `threads` threads.
+template <class Voxel>
+VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
+                              std::size_t limit, bool record, std::size_t threads) {
+  const std::vector<PointRange> parts = point_parts(cloud.size());
+  std::vector<std::optional<VoxelTable<Voxel>>> tables(parts.size());
+  for_parts(parts.size(), threads, [&](std::size_t part) {
+    tables[part] = table_of<Voxel>(cloud, grid, parts[part], expected, limit, record);
+  });
+  VoxelTable<Voxel> table = std::move(*tables.front());
+  if (record) table.point_slots.reserve(cloud.size());
+  for (std::size_t part = 1; part < parts.size(); ++part) {
+    merge_later(table, std::move(*tables[part]), limit);
   }
   return table;
 }
 
-// accumulate_voxels over the grid of a complete counting pass, reusing its hashing.
 template <class Voxel>
-VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, CountedGrid counted) {
-  VoxelTable<Voxel> table{std::move(counted.slots), {}};
-  table.voxels.reserve(table.slots.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const std::uint32_t slot = counted.point_slots[i];
-    if (slot == table.voxels.size()) table.voxels.emplace_back(counted.grid.key(cloud.points[i]));
-    table.voxels[slot].add(cloud.points[i]);
+VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
+                                    std::size_t threads) {
+  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
+  return voxel_table<Voxel>(cloud, grid, cloud.size() / 8, std::numeric_limits<std::size_t>::max(),
+                            false, threads);
+}
+
+// accumulate_voxels over the voxels of a complete counting pass, reusing its hashing: each part
+// sums into its own array by slot, and the arrays are added in part order.
+template <class Voxel>
+VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted>&& counted,
+                                     std::size_t threads) {
+  const std::vector<PointRange> parts = point_parts(cloud.size());
+  std::vector<std::vector<Voxel>> sums(parts.size());
+  for_parts(parts.size(), threads, [&](std::size_t part) {
+    std::vector<Voxel>& voxels = sums[part];
+    voxels.resize(counted.keys.size());
+    for (std::size_t i = parts[part].begin; i < parts[part].end; ++i) {
+      voxels[counted.point_slots[i]].add(cloud.points[i]);
+    }
+  });
+  for (std::size_t part = 1; part < parts.size(); ++part) {
+    for (std::size_t s = 0; s < sums.front().size(); ++s) sums.front()[s] += sums[part][s];
   }
-  return table;
+  return {std::move(counted.slots), std::move(counted.keys), std::move(sums.front()), {}};
 }
 
 // The centroids of a table's voxels, as a cloud measured from origin_m.
@@ -485,9 +571,11 @@ PointCloud centroids_of(const std::vector<Voxel>& voxels, const Eigen::Vector3d&
 // The surface at voxel v's centroid from the points of its 3x3x3 block of voxels: 26 table
 // look-ups and a 3x3 eigen-solve, against a k-nearest query over the centroids and a
 // covariance of its k neighbours (half the time on a Kinect frame, docs/performance.md).
-PointSurface block_surface(const VoxelSlots& slots, const std::vector<Moments>& voxels,
-                           std::size_t v, const NeighborhoodSettings& stored) {
-  const VoxelKey& centre = voxels[v].key;
+PointSurface block_surface(const VoxelTable<Moments>& table, std::size_t v,
+                           const NeighborhoodSettings& stored) {
+  const VoxelSlots& slots = table.slots;
+  const std::vector<Moments>& voxels = table.voxels;
+  const VoxelKey& centre = table.keys[v];
   double count = 0.0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   std::array<double, 6> outer{};
@@ -511,10 +599,11 @@ PointSurface block_surface(const VoxelSlots& slots, const std::vector<Moments>& 
                              static_cast<std::size_t>(count), stored);
 }
 
-// voxel_size_for_count; `settled` (if not null) receives the counting pass of the returned
-// size when one counted it (the search ended within its tolerance), else nullopt.
-double search_voxel_size(const PointCloud& cloud, std::size_t target_points,
-                         std::optional<CountedGrid>* settled) {
+// voxel_size_for_count on up to `threads` threads; `settled` (if not null) receives the counting
+// pass of the returned size when one counted it (the search ended within its tolerance), else
+// nullopt.
+double search_voxel_size(const PointCloud& cloud, std::size_t target_points, std::size_t threads,
+                         std::optional<VoxelTable<Counted>>* settled) {
   if (settled != nullptr) settled->reset();
   if (target_points == 0 || cloud.size() <= target_points) return 0.0;
   const float largest = largest_coordinate(cloud);
@@ -537,10 +626,11 @@ double search_voxel_size(const PointCloud& cloud, std::size_t target_points,
   // Each point's slot is kept as 32 bits: a larger cloud is counted, not reused.
   const bool keep = settled != nullptr && cloud.size() <= std::numeric_limits<std::uint32_t>::max();
   for (int pass = 0; pass < kVoxelSearchPasses; ++pass) {
-    CountedGrid counted = count_voxels(cloud, VoxelGrid(size, largest), target_points, limit, keep);
-    const auto count = static_cast<double>(counted.slots.size());
+    VoxelTable<Counted> counted =
+        voxel_table<Counted>(cloud, VoxelGrid(size, largest), target_points, limit, keep, threads);
+    const auto count = static_cast<double>(counted.over_limit ? limit + 1 : counted.keys.size());
     if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) {
-      if (keep && !counted.point_slots.empty()) *settled = std::move(counted);
+      if (keep) *settled = std::move(counted);
       break;
     }
     if (previous_size > 0.0 && count <= static_cast<double>(limit) &&
@@ -558,18 +648,18 @@ double search_voxel_size(const PointCloud& cloud, std::size_t target_points,
 // The grid a registration thins `cloud` with (registration_voxel_size); `settled` as for
 // search_voxel_size.
 double grid_size(const PointCloud& cloud, double voxel_size_m, std::size_t downsample_to,
-                 std::optional<CountedGrid>* settled) {
+                 std::size_t threads, std::optional<VoxelTable<Counted>>* settled) {
   if (voxel_size_m > 0.0) return voxel_size_m;
   if (cloud.has_normals() || cloud.has_covariances()) return 0.0;
-  return search_voxel_size(cloud, downsample_to, settled);
+  return search_voxel_size(cloud, downsample_to, threads, settled);
 }
 
 // accumulate_voxels, reusing the hashing of the search's settling pass when there is one.
 template <class Voxel>
-VoxelTable<Voxel> accumulate(const PointCloud& cloud, double voxel_size_m,
-                             std::optional<CountedGrid>& settled) {
-  return settled ? accumulate_counted<Voxel>(cloud, std::move(*settled))
-                 : accumulate_voxels<Voxel>(cloud, voxel_size_m);
+VoxelTable<Voxel> accumulate(const PointCloud& cloud, double voxel_size_m, std::size_t threads,
+                             std::optional<VoxelTable<Counted>>& settled) {
+  return settled ? accumulate_counted<Voxel>(cloud, std::move(*settled), threads)
+                 : accumulate_voxels<Voxel>(cloud, voxel_size_m, threads);
 }
 
 // voxel_downsample_with_surfaces of an accumulated table; `stored` from in_stored_frame.
@@ -585,7 +675,7 @@ PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Ve
   parallel_chunks(n, resolve_threads(threads, n), [&](std::size_t begin, std::size_t end) {
     for (std::size_t v = begin; v < end; ++v) {
       out.points[v] = voxels[v].centroid();
-      const PointSurface s = block_surface(table.slots, voxels, v, stored);
+      const PointSurface s = block_surface(table, v, stored);
       out.normals[v] = s.normal;
       out.covariances[v] = s.covariance;
     }
@@ -637,15 +727,15 @@ PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
 RegistrationGrid registration_grid(const PointCloud& cloud, double voxel_size_m,
                                    std::size_t downsample_to, const NeighborhoodSettings& settings,
                                    bool surfaces) {
-  std::optional<CountedGrid> settled;
-  voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, &settled);
+  std::optional<VoxelTable<Counted>> settled;
+  voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, settings.num_threads, &settled);
   if (voxel_size_m == 0.0) return {};
   if (!surfaces) {
-    const auto table = accumulate<Centroid>(cloud, voxel_size_m, settled);
+    const auto table = accumulate<Centroid>(cloud, voxel_size_m, settings.num_threads, settled);
     return {centroids_of(table.voxels, cloud.origin_m), voxel_size_m};
   }
   check_neighborhood(settings);
-  const auto table = accumulate<Moments>(cloud, voxel_size_m, settled);
+  const auto table = accumulate<Moments>(cloud, voxel_size_m, settings.num_threads, settled);
   // A 3x3 patch of voxels across a surface holds about 9 * (points per voxel): at least k of
   // them, or the centroids' own k nearest neighbours give the better estimate.
   if (9 * cloud.size() < settings.k * table.voxels.size()) {
@@ -690,24 +780,31 @@ void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
   estimate(cloud, index, settings, false);
 }
 
-PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m) {
-  return centroids_of(accumulate_voxels<Centroid>(cloud, voxel_size_m).voxels, cloud.origin_m);
+PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m, std::size_t num_threads) {
+  if (num_threads > kMaxThreads) {
+    throw InvalidSettingsError("voxel_downsample: num_threads must be at most " +
+                               std::to_string(kMaxThreads) + " (0 = all cores), got " +
+                               std::to_string(num_threads));
+  }
+  return centroids_of(accumulate_voxels<Centroid>(cloud, voxel_size_m, num_threads).voxels,
+                      cloud.origin_m);
 }
 
 PointCloud voxel_downsample_with_surfaces(const PointCloud& cloud, double voxel_size_m,
                                           const NeighborhoodSettings& settings) {
   check_neighborhood(settings);
-  return with_block_surfaces(accumulate_voxels<Moments>(cloud, voxel_size_m), cloud.origin_m,
-                             detail::in_stored_frame(settings, cloud), settings.num_threads);
+  return with_block_surfaces(accumulate_voxels<Moments>(cloud, voxel_size_m, settings.num_threads),
+                             cloud.origin_m, detail::in_stored_frame(settings, cloud),
+                             settings.num_threads);
 }
 
 double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {
-  return search_voxel_size(cloud, target_points, nullptr);
+  return search_voxel_size(cloud, target_points, 1, nullptr);
 }
 
 double registration_voxel_size(const PointCloud& cloud, double voxel_size_m,
                                std::size_t downsample_to) {
-  return grid_size(cloud, voxel_size_m, downsample_to, nullptr);
+  return grid_size(cloud, voxel_size_m, downsample_to, 1, nullptr);
 }
 
 PointCloud random_downsample(const PointCloud& cloud, std::size_t count, std::uint64_t seed) {

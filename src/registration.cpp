@@ -305,7 +305,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
           ? settings.coarse_cost
           : settings.cost;
   const detail::PreparedSource src(
-      source, voxel_m, frame.origin_m(), source_needs, settings.neighborhood,
+      source, voxel_m, settings.num_threads, frame.origin_m(), source_needs, settings.neighborhood,
       min_source_points(settings),
       settings.cap_batch_to_source ? "the smallest mini-batch" : "the mini-batch size",
       detail::SurfaceEstimation::lazy);

@@ -43,14 +43,16 @@ class PreparedSource {
  public:
   /// `origin_m`: the origin of the pair's frame (PairFrame); a source stored relative to
   /// another origin is re-based onto it (a copy, only then).
-  /// voxel_size_m > 0: the source is first thinned with that voxel grid (source_voxel_size).
-  PreparedSource(const PointCloud& source, double voxel_size_m, const Eigen::Vector3d& origin_m,
-                 CostType cost, const NeighborhoodSettings& neighborhood, std::size_t min_points,
+  /// voxel_size_m > 0: the source is first thinned with that voxel grid (source_voxel_size), on
+  /// up to `threads` threads (the registration's num_threads).
+  PreparedSource(const PointCloud& source, double voxel_size_m, std::size_t threads,
+                 const Eigen::Vector3d& origin_m, CostType cost,
+                 const NeighborhoodSettings& neighborhood, std::size_t min_points,
                  const std::string& why_min, SurfaceEstimation when = SurfaceEstimation::eager)
       : cloud_(&source) {
     check_source(source, min_points, why_min);
     if (voxel_size_m > 0.0) {
-      copy_ = voxel_downsample(source, voxel_size_m);
+      copy_ = voxel_downsample(source, voxel_size_m, threads);
       cloud_ = &*copy_;
       if (copy_->size() < min_points) {
         throw InvalidInputError("source cloud has " + std::to_string(copy_->size()) +

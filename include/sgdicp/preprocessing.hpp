@@ -82,10 +82,15 @@ void check_reference_prepared(const ReferenceIndex& reference, CostType cost);
 /// deterministic. Normals and covariances are not carried over (the output has none):
 /// estimate them after downsampling.
 ///
+/// num_threads (0 = every core): clouds of 32,768 points or more are hashed and summed in two
+/// fixed halves, merged in order, which two threads make at once; the result is the same for any
+/// count.
+///
 /// An empty cloud gives an empty cloud. Throws InvalidSettingsError when voxel_size_m is not
-/// positive and finite or so small that voxel indices would exceed 2^62 in magnitude, and
-/// InvalidInputError for a non-finite point.
-[[nodiscard]] PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m);
+/// positive and finite or so small that voxel indices would exceed 2^62 in magnitude, or
+/// num_threads is above 1024, and InvalidInputError for a non-finite point.
+[[nodiscard]] PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m,
+                                          std::size_t num_threads = 1);
 
 /// voxel_downsample (same points, same order), with each centroid's normal and covariance
 /// estimated as estimate_covariances does (settings: regularize, epsilon, viewpoint,

@@ -89,12 +89,13 @@ struct SgdSettings {
   /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report
   /// it in the result (evaluation.hpp); costs about `evaluation_points` k-nearest queries.
   bool check_degeneracy = true;
-  /// Threads of one registration: today the KD-tree build where the library builds the index
-  /// (reference_index_for: align() on clouds, the CLI, Python; KdTreeSettings::num_threads) and,
-  /// for a plane cost, the reference normals or covariances of the grid, estimated there all at
-  /// once instead of one by one in the run (1.1-1.2x on KITTI and Kinect pairs, two vCPUs: docs/
-  /// performance.md); the SGD loop itself runs on one. 0 = every core. The result is identical
-  /// for any count.
+  /// Threads of one registration: where the library builds the index (reference_index_for:
+  /// align() on clouds, the CLI, Python) the voxel grid's passes over the raw points (the size
+  /// search's counting and the thinning, in two fixed halves), the KD-tree build
+  /// (KdTreeSettings::num_threads) and, for a plane cost, the reference normals or covariances
+  /// of the grid, estimated there all at once instead of one by one in the run; the source's
+  /// thinning in align(). The SGD loop itself runs on one (docs/performance.md). 0 = every core.
+  /// The result is identical for any count.
   std::size_t num_threads = 1;
   /// Voxel-grid downsampling of both clouds before registering (preprocessing.hpp): the voxel
   /// side, metres; 0 = the grid downsample_to chooses.
