@@ -414,6 +414,42 @@ TEST(VoxelDownsample, CentroidsOfOccupiedVoxelsInFirstOccurrenceOrder) {
   }
 }
 
+// Clouds of 32,768 points and more are made in two halves merged in order: the same centroids in
+// the same first-occurrence order as one pass over all points, for any thread count.
+TEST(VoxelDownsample, HalvesMergeToTheOnePassResultOnAnyThreadCount) {
+  std::mt19937_64 rng(22);
+  PointCloud cloud = random_box(rng, 100000, {-5, -3, -2}, {4, 3, 1});
+  // A second half that adds voxels of its own (beyond x = 4) besides shared ones.
+  for (std::size_t i = cloud.size() / 2; i < cloud.size(); i += 3) cloud.points[i].x() += 3.0F;
+  const double voxel = 0.5;
+  std::map<Key, std::size_t> slot;
+  std::vector<std::pair<Eigen::Vector3d, int>> sums;
+  for (const auto& p : cloud.points) {
+    const auto [it, added] = slot.try_emplace(key_of(p, voxel), sums.size());
+    if (added) sums.emplace_back(Eigen::Vector3d::Zero(), 0);
+    sums[it->second].first += p.cast<double>();
+    ++sums[it->second].second;
+  }
+  const PointCloud one = sgdicp::voxel_downsample(cloud, voxel, 1);
+  ASSERT_EQ(one.size(), sums.size());
+  for (std::size_t i = 0; i < one.size(); ++i) {
+    const Eigen::Vector3d centroid = sums[i].first / sums[i].second;
+    ASSERT_LT((one.points[i].cast<double>() - centroid).norm(), 1e-5) << i;
+  }
+  EXPECT_EQ(sgdicp::voxel_downsample(cloud, voxel, 2).points, one.points);
+  EXPECT_EQ(sgdicp::voxel_downsample(cloud, voxel, 0).points, one.points);
+  NeighborhoodSettings settings;
+  settings.num_threads = 1;
+  const PointCloud surfaces_one = sgdicp::voxel_downsample_with_surfaces(cloud, voxel, settings);
+  settings.num_threads = 2;
+  const PointCloud surfaces_two = sgdicp::voxel_downsample_with_surfaces(cloud, voxel, settings);
+  EXPECT_EQ(surfaces_one.points, one.points);
+  EXPECT_EQ(surfaces_two.points, one.points);
+  EXPECT_EQ(surfaces_two.normals, surfaces_one.normals);
+  EXPECT_EQ(surfaces_two.covariances, surfaces_one.covariances);
+  EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, voxel, 5000), InvalidSettingsError);
+}
+
 TEST(VoxelDownsample, NegativeCoordinatesUseFloor) {
   PointCloud cloud;
   // -0.1 and 0.1 straddle 0: truncation towards zero would merge them into one voxel.
