@@ -29,128 +29,161 @@ struct PcdHeader {
   std::array<std::size_t, 3> xyz{};  // field index of x, y, z
 };
 
-PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
-  PcdHeader header;
-  bool have_fields = false;
-  bool have_size = false;
-  bool have_type = false;
-  bool have_width = false;
-  bool have_points = false;
-  bool have_data = false;
-  std::string_view line;
-  while (!have_data && cursor.next_line(line)) {
-    const std::size_t at = cursor.line();
-    const auto tokens = split_whitespace(line);
-    if (tokens.empty() || tokens[0].front() == '#') continue;
-    const std::string_view key = tokens[0];
-    const std::span<const std::string_view> values(tokens.begin() + 1, tokens.end());
-    const auto expect_values = [&](std::size_t n) {
-      if (values.size() != n) {
-        fail_line(name, at,
-                  std::string(key) + " needs " + std::to_string(n) + " value(s), got " +
-                      std::to_string(values.size()));
-      }
-    };
-    const auto per_field = [&]() {
-      if (!have_fields) fail_line(name, at, std::string(key) + " before FIELDS");
-      expect_values(header.fields.size());
-    };
-    const auto uint_value = [&](std::string_view token) {
-      std::uint64_t v = 0;
-      if (!parse_uint(token, v)) {
-        fail_line(name, at, std::string(key) + " value " + shown(token) + " is not a count");
-      }
-      return v;
-    };
+// One header line: its key, the values after it and its number, for the messages.
+struct PcdKeyLine {
+  const std::string& name;
+  std::size_t at;
+  std::string_view key;
+  std::span<const std::string_view> values;
 
-    if (key == "VERSION") {
-      expect_values(1);
-      constexpr std::array<std::string_view, 6> kKnown = {".5", "0.5", ".6", "0.6", ".7", "0.7"};
-      if (std::find(kKnown.begin(), kKnown.end(), values[0]) == kKnown.end()) {
-        fail_line(name, at, "unsupported PCD version " + shown(values[0]));
-      }
-    } else if (key == "FIELDS" || key == "COLUMNS") {  // COLUMNS: the v0.5 spelling
-      if (have_fields) fail_line(name, at, "second FIELDS line");
-      if (values.empty()) fail_line(name, at, "FIELDS lists no field");
-      for (const auto v : values) header.fields.push_back(PcdField{std::string(v)});
-      have_fields = true;
-      header.fields_line = at;
-    } else if (key == "SIZE") {
-      per_field();
-      for (std::size_t i = 0; i < values.size(); ++i) {
-        const auto size = uint_value(values[i]);
-        if (size != 1 && size != 2 && size != 4 && size != 8) {
-          fail_line(name, at, "SIZE of field '" + header.fields[i].name + "' must be 1, 2, 4 or 8");
-        }
-        header.fields[i].size = static_cast<std::size_t>(size);
-      }
-      have_size = true;
-    } else if (key == "TYPE") {
-      per_field();
-      for (std::size_t i = 0; i < values.size(); ++i) {
-        if (values[i] != "I" && values[i] != "U" && values[i] != "F") {
-          fail_line(name, at,
-                    "TYPE " + shown(values[i]) + " of field '" + header.fields[i].name +
-                        "' is not I, U or F");
-        }
-        header.fields[i].type = values[i][0];
-      }
-      have_type = true;
-      header.type_line = at;
-    } else if (key == "COUNT") {
-      per_field();
-      for (std::size_t i = 0; i < values.size(); ++i) {
-        header.fields[i].count = uint_value(values[i]);
-        if (header.fields[i].count == 0) {
-          fail_line(name, at, "COUNT of field '" + header.fields[i].name + "' is 0");
-        }
-      }
-    } else if (key == "WIDTH") {
-      expect_values(1);
-      header.width = uint_value(values[0]);
-      have_width = true;
-    } else if (key == "HEIGHT") {
-      expect_values(1);
-      header.height = uint_value(values[0]);
-    } else if (key == "VIEWPOINT") {
-      expect_values(7);
-      for (const auto v : values) {
-        if (double f = 0.0; !parse_number(v, f)) {
-          fail_line(name, at, "VIEWPOINT value " + shown(v) + " is not a number");
-        }
-      }
-    } else if (key == "POINTS") {
-      expect_values(1);
-      header.points = uint_value(values[0]);
-      have_points = true;
-      header.points_line = at;
-    } else if (key == "DATA") {
-      expect_values(1);
-      if (values[0] == "ascii") {
-        header.data = PcdData::ascii;
-      } else if (values[0] == "binary") {
-        header.data = PcdData::binary;
-      } else if (values[0] == "binary_compressed") {
-        header.data = PcdData::binary_compressed;
-      } else {
-        fail_line(name, at,
-                  "unknown DATA " + shown(values[0]) + " (ascii, binary or binary_compressed)");
-      }
-      have_data = true;
-      header.data_line = at;
-      header.data_offset = cursor.offset();
-    } else {
-      fail_line(name, at, "unknown PCD header key " + shown(key));
+  [[noreturn]] void fail(const std::string& what) const { fail_line(name, at, what); }
+
+  void expect_values(std::size_t n) const {
+    if (values.size() != n) {
+      fail(std::string(key) + " needs " + std::to_string(n) + " value(s), got " +
+           std::to_string(values.size()));
     }
   }
 
-  const std::size_t end_line = cursor.line();
-  if (!have_data) fail_line(name, end_line, "PCD header has no DATA line");
-  if (!have_fields) fail_line(name, end_line, "PCD header has no FIELDS line");
-  if (!have_size) fail_line(name, end_line, "PCD header has no SIZE line");
-  if (!have_type) fail_line(name, end_line, "PCD header has no TYPE line");
-  if (!have_width) fail_line(name, end_line, "PCD header has no WIDTH line");
+  [[nodiscard]] std::uint64_t uint_value(std::string_view token) const {
+    std::uint64_t v = 0;
+    if (!parse_uint(token, v)) {
+      fail(std::string(key) + " value " + shown(token) + " is not a count");
+    }
+    return v;
+  }
+};
 
+// The header keys seen so far: FIELDS, SIZE, TYPE and WIDTH must be there, DATA ends the header.
+struct PcdKeysSeen {
+  bool fields = false;
+  bool size = false;
+  bool type = false;
+  bool width = false;
+  bool points = false;
+  bool data = false;
+};
+
+void check_pcd_version(const PcdKeyLine& line) {
+  line.expect_values(1);
+  constexpr std::array<std::string_view, 6> kKnown = {".5", "0.5", ".6", "0.6", ".7", "0.7"};
+  if (std::find(kKnown.begin(), kKnown.end(), line.values[0]) == kKnown.end()) {
+    line.fail("unsupported PCD version " + shown(line.values[0]));
+  }
+}
+
+void parse_pcd_fields(const PcdKeyLine& line, PcdHeader& header, PcdKeysSeen& seen) {
+  if (seen.fields) line.fail("second FIELDS line");
+  if (line.values.empty()) line.fail("FIELDS lists no field");
+  for (const auto v : line.values) header.fields.push_back(PcdField{std::string(v)});
+  seen.fields = true;
+  header.fields_line = line.at;
+}
+
+// SIZE, TYPE and COUNT give one value per field, so they need FIELDS before them.
+void expect_per_field(const PcdKeyLine& line, const PcdHeader& header, const PcdKeysSeen& seen) {
+  if (!seen.fields) line.fail(std::string(line.key) + " before FIELDS");
+  line.expect_values(header.fields.size());
+}
+
+void parse_pcd_sizes(const PcdKeyLine& line, PcdHeader& header, PcdKeysSeen& seen) {
+  expect_per_field(line, header, seen);
+  for (std::size_t i = 0; i < line.values.size(); ++i) {
+    const auto size = line.uint_value(line.values[i]);
+    if (size != 1 && size != 2 && size != 4 && size != 8) {
+      line.fail("SIZE of field '" + header.fields[i].name + "' must be 1, 2, 4 or 8");
+    }
+    header.fields[i].size = static_cast<std::size_t>(size);
+  }
+  seen.size = true;
+}
+
+void parse_pcd_types(const PcdKeyLine& line, PcdHeader& header, PcdKeysSeen& seen) {
+  expect_per_field(line, header, seen);
+  for (std::size_t i = 0; i < line.values.size(); ++i) {
+    const std::string_view type = line.values[i];
+    if (type != "I" && type != "U" && type != "F") {
+      line.fail("TYPE " + shown(type) + " of field '" + header.fields[i].name +
+                "' is not I, U or F");
+    }
+    header.fields[i].type = type[0];
+  }
+  seen.type = true;
+  header.type_line = line.at;
+}
+
+void parse_pcd_counts(const PcdKeyLine& line, PcdHeader& header, const PcdKeysSeen& seen) {
+  expect_per_field(line, header, seen);
+  for (std::size_t i = 0; i < line.values.size(); ++i) {
+    header.fields[i].count = line.uint_value(line.values[i]);
+    if (header.fields[i].count == 0) {
+      line.fail("COUNT of field '" + header.fields[i].name + "' is 0");
+    }
+  }
+}
+
+void check_pcd_viewpoint(const PcdKeyLine& line) {
+  line.expect_values(7);
+  for (const auto v : line.values) {
+    if (double f = 0.0; !parse_number(v, f)) {
+      line.fail("VIEWPOINT value " + shown(v) + " is not a number");
+    }
+  }
+}
+
+PcdData parse_pcd_data(const PcdKeyLine& line) {
+  line.expect_values(1);
+  if (line.values[0] == "ascii") return PcdData::ascii;
+  if (line.values[0] == "binary") return PcdData::binary;
+  if (line.values[0] == "binary_compressed") return PcdData::binary_compressed;
+  line.fail("unknown DATA " + shown(line.values[0]) + " (ascii, binary or binary_compressed)");
+}
+
+// Applies one header line to the header.
+void parse_pcd_key(const PcdKeyLine& line, PcdHeader& header, PcdKeysSeen& seen) {
+  const std::string_view key = line.key;
+  if (key == "VERSION") {
+    check_pcd_version(line);
+  } else if (key == "FIELDS" || key == "COLUMNS") {  // COLUMNS: the v0.5 spelling
+    parse_pcd_fields(line, header, seen);
+  } else if (key == "SIZE") {
+    parse_pcd_sizes(line, header, seen);
+  } else if (key == "TYPE") {
+    parse_pcd_types(line, header, seen);
+  } else if (key == "COUNT") {
+    parse_pcd_counts(line, header, seen);
+  } else if (key == "WIDTH") {
+    line.expect_values(1);
+    header.width = line.uint_value(line.values[0]);
+    seen.width = true;
+  } else if (key == "HEIGHT") {
+    line.expect_values(1);
+    header.height = line.uint_value(line.values[0]);
+  } else if (key == "VIEWPOINT") {
+    check_pcd_viewpoint(line);
+  } else if (key == "POINTS") {
+    line.expect_values(1);
+    header.points = line.uint_value(line.values[0]);
+    seen.points = true;
+    header.points_line = line.at;
+  } else if (key == "DATA") {
+    header.data = parse_pcd_data(line);
+    seen.data = true;
+    header.data_line = line.at;
+  } else {
+    line.fail("unknown PCD header key " + shown(key));
+  }
+}
+
+void check_pcd_keys_seen(const std::string& name, std::size_t end_line, const PcdKeysSeen& seen) {
+  if (!seen.data) fail_line(name, end_line, "PCD header has no DATA line");
+  if (!seen.fields) fail_line(name, end_line, "PCD header has no FIELDS line");
+  if (!seen.size) fail_line(name, end_line, "PCD header has no SIZE line");
+  if (!seen.type) fail_line(name, end_line, "PCD header has no TYPE line");
+  if (!seen.width) fail_line(name, end_line, "PCD header has no WIDTH line");
+}
+
+void check_pcd_float_sizes(const std::string& name, const PcdHeader& header) {
   for (const auto& field : header.fields) {
     if (field.type == 'F' && field.size != 4 && field.size != 8) {
       fail_line(name, header.type_line,
@@ -158,6 +191,11 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
                     " (only 4 or 8)");
     }
   }
+}
+
+// Field index of x, y and z: each must appear once, as a single float.
+std::array<std::size_t, 3> find_pcd_xyz(const std::string& name, const PcdHeader& header) {
+  std::array<std::size_t, 3> xyz{};
   constexpr std::array<std::string_view, 3> kAxes = {"x", "y", "z"};
   for (std::size_t axis = 0; axis < 3; ++axis) {
     const auto found = std::find_if(header.fields.begin(), header.fields.end(),
@@ -175,9 +213,13 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
           name, header.type_line,
           "field '" + found->name + "' must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)");
     }
-    header.xyz[axis] = static_cast<std::size_t>(found - header.fields.begin());
+    xyz[axis] = static_cast<std::size_t>(found - header.fields.begin());
   }
+  return xyz;
+}
 
+// POINTS, when given, must be WIDTH x HEIGHT; without it, WIDTH x HEIGHT is the point count.
+void set_pcd_points(const std::string& name, PcdHeader& header, bool have_points) {
   const auto cells = checked_mul(header.width, header.height);
   if (!have_points) {
     if (!cells) fail_line(name, header.data_line, "WIDTH x HEIGHT overflows");
@@ -191,6 +233,23 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
     fail_line(name, have_points ? header.points_line : header.data_line,
               cloud_limit_text(header.points));
   }
+}
+
+PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
+  PcdHeader header;
+  PcdKeysSeen seen;
+  std::string_view line;
+  while (!seen.data && cursor.next_line(line)) {
+    const auto tokens = split_whitespace(line);
+    if (tokens.empty() || tokens[0].front() == '#') continue;
+    const PcdKeyLine key_line{name, cursor.line(), tokens[0], {tokens.begin() + 1, tokens.end()}};
+    parse_pcd_key(key_line, header, seen);
+    if (seen.data) header.data_offset = cursor.offset();  // the data starts after the DATA line
+  }
+  check_pcd_keys_seen(name, cursor.line(), seen);
+  check_pcd_float_sizes(name, header);
+  header.xyz = find_pcd_xyz(name, header);
+  set_pcd_points(name, header, seen.points);
   return header;
 }
 

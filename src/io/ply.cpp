@@ -104,75 +104,91 @@ struct PlyHeader {
   std::size_t end_line = 0;  // line of end_header
 };
 
-PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
-  PlyHeader header;
-  std::string_view line;
-  if (!cursor.next_line(line) || trim(line) != "ply") {
-    fail_line(name, 1, "not a PLY file (the first line must be 'ply')");
+// One header line: its tokens, its text and its number, for the messages.
+struct PlyHeaderLine {
+  const std::string& name;
+  std::size_t at;
+  std::string_view text;
+  std::span<const std::string_view> tokens;
+
+  [[noreturn]] void fail(const std::string& what) const { fail_line(name, at, what); }
+};
+
+PlyEncoding parse_ply_format(const PlyHeaderLine& line) {
+  const auto& tokens = line.tokens;
+  const bool known_version = tokens.size() == 3 && (tokens[2] == "1.0" || tokens[2] == "1");
+  if (known_version && tokens[1] == "ascii") return PlyEncoding::ascii;
+  if (known_version && tokens[1] == "binary_little_endian") {
+    return PlyEncoding::binary_little_endian;
   }
+  if (known_version && tokens[1] == "binary_big_endian") return PlyEncoding::binary_big_endian;
+  line.fail("bad format line " + shown(trim(line.text)) +
+            " (expected 'format ascii|binary_little_endian|binary_big_endian 1.0')");
+}
+
+PlyElement parse_ply_element(const PlyHeaderLine& line) {
+  std::uint64_t count = 0;
+  if (line.tokens.size() != 3 || !parse_uint(line.tokens[2], count)) {
+    line.fail("bad element line " + shown(trim(line.text)) +
+              " (expected 'element <name> <count>')");
+  }
+  return PlyElement{std::string(line.tokens[1]), count, {}, line.at};
+}
+
+PlyProperty parse_ply_property(const PlyHeaderLine& line) {
+  const auto& tokens = line.tokens;
+  if (tokens.size() == 5 && tokens[1] == "list") {
+    const auto count_type = ply_type(tokens[2]);
+    const auto item_type = ply_type(tokens[3]);
+    if (!count_type || !item_type) line.fail("unknown type in " + shown(trim(line.text)));
+    if (*count_type == PlyType::f32 || *count_type == PlyType::f64) {
+      line.fail("list length type must be an integer type");
+    }
+    return PlyProperty{std::string(tokens[4]), *item_type, true, *count_type};
+  }
+  if (tokens.size() == 3) {
+    const auto type = ply_type(tokens[1]);
+    if (!type) line.fail("unknown property type " + shown(tokens[1]));
+    return PlyProperty{std::string(tokens[2]), *type};
+  }
+  line.fail("bad property line " + shown(trim(line.text)));
+}
+
+// Reads the header lines up to end_header: the format, the elements and their properties.
+void parse_ply_header_lines(const std::string& name, TextCursor& cursor, PlyHeader& header) {
   bool have_format = false;
   bool have_end = false;
-  while (!have_end && cursor.next_line(line)) {
-    const std::size_t at = cursor.line();
-    const auto tokens = split_whitespace(line);
+  std::string_view text;
+  while (!have_end && cursor.next_line(text)) {
+    const auto tokens = split_whitespace(text);
     if (tokens.empty()) continue;
+    const PlyHeaderLine line{name, cursor.line(), text, tokens};
     const std::string_view keyword = tokens[0];
     if (keyword == "format") {
-      if (have_format) fail_line(name, at, "second format line");
-      const bool known_version = tokens.size() == 3 && (tokens[2] == "1.0" || tokens[2] == "1");
-      if (known_version && tokens[1] == "ascii") {
-        header.encoding = PlyEncoding::ascii;
-      } else if (known_version && tokens[1] == "binary_little_endian") {
-        header.encoding = PlyEncoding::binary_little_endian;
-      } else if (known_version && tokens[1] == "binary_big_endian") {
-        header.encoding = PlyEncoding::binary_big_endian;
-      } else {
-        fail_line(name, at,
-                  "bad format line " + shown(trim(line)) +
-                      " (expected 'format ascii|binary_little_endian|binary_big_endian 1.0')");
-      }
+      if (have_format) line.fail("second format line");
+      header.encoding = parse_ply_format(line);
       have_format = true;
     } else if (keyword == "comment" || keyword == "obj_info") {
       continue;
     } else if (keyword == "element") {
-      std::uint64_t count = 0;
-      if (tokens.size() != 3 || !parse_uint(tokens[2], count)) {
-        fail_line(name, at,
-                  "bad element line " + shown(trim(line)) + " (expected 'element <name> <count>')");
-      }
-      header.elements.push_back(PlyElement{std::string(tokens[1]), count, {}, at});
+      header.elements.push_back(parse_ply_element(line));
     } else if (keyword == "property") {
-      if (header.elements.empty()) fail_line(name, at, "property before any element");
-      PlyProperty property;
-      if (tokens.size() == 5 && tokens[1] == "list") {
-        const auto count_type = ply_type(tokens[2]);
-        const auto item_type = ply_type(tokens[3]);
-        if (!count_type || !item_type) {
-          fail_line(name, at, "unknown type in " + shown(trim(line)));
-        }
-        if (*count_type == PlyType::f32 || *count_type == PlyType::f64) {
-          fail_line(name, at, "list length type must be an integer type");
-        }
-        property = PlyProperty{std::string(tokens[4]), *item_type, true, *count_type};
-      } else if (tokens.size() == 3) {
-        const auto type = ply_type(tokens[1]);
-        if (!type) fail_line(name, at, "unknown property type " + shown(tokens[1]));
-        property = PlyProperty{std::string(tokens[2]), *type};
-      } else {
-        fail_line(name, at, "bad property line " + shown(trim(line)));
-      }
-      header.elements.back().properties.push_back(std::move(property));
+      if (header.elements.empty()) line.fail("property before any element");
+      header.elements.back().properties.push_back(parse_ply_property(line));
     } else if (keyword == "end_header") {
       have_end = true;
-      header.end_line = at;
+      header.end_line = line.at;
       header.data_offset = cursor.offset();
     } else {
-      fail_line(name, at, "unknown PLY header keyword " + shown(keyword));
+      line.fail("unknown PLY header keyword " + shown(keyword));
     }
   }
   if (!have_end) fail_line(name, cursor.line(), "PLY header has no end_header line");
   if (!have_format) fail_line(name, header.end_line, "PLY header has no format line");
+}
 
+// Index of the one vertex element.
+std::size_t find_ply_vertex(const std::string& name, const PlyHeader& header) {
   const auto is_vertex = [](const PlyElement& e) { return e.name == "vertex"; };
   const auto vertex = std::find_if(header.elements.begin(), header.elements.end(), is_vertex);
   if (vertex == header.elements.end())
@@ -180,22 +196,40 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
   if (std::find_if(vertex + 1, header.elements.end(), is_vertex) != header.elements.end()) {
     fail_line(name, header.end_line, "PLY has two vertex elements");
   }
-  header.vertex = static_cast<std::size_t>(vertex - header.elements.begin());
+  return static_cast<std::size_t>(vertex - header.elements.begin());
+}
+
+// Property index of x, y and z in the vertex element: each must be there, and not a list.
+std::array<std::size_t, 3> find_ply_xyz(const std::string& name, const PlyElement& vertex) {
+  std::array<std::size_t, 3> xyz{};
   constexpr std::array<std::string_view, 3> kAxes = {"x", "y", "z"};
   for (std::size_t axis = 0; axis < 3; ++axis) {
-    const auto& props = vertex->properties;
+    const auto& props = vertex.properties;
     const auto found = std::find_if(props.begin(), props.end(),
                                     [&](const PlyProperty& p) { return p.name == kAxes[axis]; });
     if (found == props.end()) {
-      fail_line(name, vertex->line,
+      fail_line(name, vertex.line,
                 "vertex element has no '" + std::string(kAxes[axis]) + "' property");
     }
     if (found->is_list)
-      fail_line(name, vertex->line, "vertex property '" + found->name + "' is a list");
-    header.xyz[axis] = static_cast<std::size_t>(found - props.begin());
+      fail_line(name, vertex.line, "vertex property '" + found->name + "' is a list");
+    xyz[axis] = static_cast<std::size_t>(found - props.begin());
   }
-  if (beyond_cloud_limit(vertex->count)) {
-    fail_line(name, vertex->line, "element vertex: " + cloud_limit_text(vertex->count));
+  return xyz;
+}
+
+PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
+  PlyHeader header;
+  std::string_view line;
+  if (!cursor.next_line(line) || trim(line) != "ply") {
+    fail_line(name, 1, "not a PLY file (the first line must be 'ply')");
+  }
+  parse_ply_header_lines(name, cursor, header);
+  header.vertex = find_ply_vertex(name, header);
+  const PlyElement& vertex = header.elements[header.vertex];
+  header.xyz = find_ply_xyz(name, vertex);
+  if (beyond_cloud_limit(vertex.count)) {
+    fail_line(name, vertex.line, "element vertex: " + cloud_limit_text(vertex.count));
   }
   return header;
 }
@@ -279,89 +313,128 @@ std::optional<std::size_t> ply_fixed_stride(const PlyElement& element) {
   return stride;
 }
 
+// Reads binary records element by element, from the end of the header to the end of the data,
+// and hands the vertices to the sink.
+class PlyBinaryReader {
+ public:
+  PlyBinaryReader(const std::string& name, const PlyHeader& header, std::string_view data,
+                  PointSink& sink)
+      : name_(name),
+        header_(header),
+        data_(data),
+        sink_(sink),
+        big_endian_(header.encoding == PlyEncoding::binary_big_endian),
+        pos_(header.data_offset) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      xyz_type_[axis] = header.elements[header.vertex].properties[header.xyz[axis]].type;
+    }
+  }
+
+  void read() {
+    for (std::size_t e = 0; e < header_.elements.size(); ++e) {
+      const PlyElement& element = header_.elements[e];
+      const bool is_vertex = e == header_.vertex;
+      if (const auto stride = ply_fixed_stride(element)) {
+        read_fixed(element, is_vertex, *stride);
+      } else {
+        read_with_lists(element, is_vertex);
+      }
+    }
+    if (pos_ != data_.size()) {
+      fail_byte(name_, pos_,
+                std::to_string(data_.size() - pos_) +
+                    " bytes after the last element (binary PLY ends with its data)");
+    }
+  }
+
+ private:
+  // Fixed-size records: one bounds check for the whole element.
+  void read_fixed(const PlyElement& element, bool is_vertex, std::size_t stride) {
+    const std::size_t available = data_.size() - pos_;
+    const auto need = checked_mul(element.count, stride);
+    if (!need || *need > available) {
+      fail_byte(name_, pos_,
+                "truncated binary data (need " + byte_count_text(need) + " bytes of " +
+                    element.name + " data, have " + std::to_string(available) + ")");
+    }
+    if (is_vertex) {
+      std::array<std::size_t, 3> xyz_offset{};  // offset of x, y, z in a vertex record
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        for (std::size_t k = 0; k < header_.xyz[axis]; ++k) {
+          xyz_offset[axis] += ply_size(element.properties[k].type);
+        }
+      }
+      const auto n = static_cast<std::size_t>(element.count);
+      sink_.reserve(n, n);
+      for (std::size_t i = 0; i < n; ++i) add_vertex(data_.data() + pos_ + i * stride, xyz_offset);
+    }
+    pos_ += static_cast<std::size_t>(*need);
+  }
+
+  // Records with lists: walk them one property at a time.
+  void read_with_lists(const PlyElement& element, bool is_vertex) {
+    if (is_vertex) sink_.reserve(element.count, (data_.size() - pos_) / 3);
+    for (std::uint64_t r = 0; r < element.count; ++r) {
+      const std::array<std::size_t, 3> xyz_at = walk_record(element, r);
+      if (is_vertex) add_vertex(data_.data(), xyz_at);
+    }
+  }
+
+  // Steps over record r of an element; returns the byte positions of its x, y, z properties
+  // (meaningful for a vertex record only).
+  std::array<std::size_t, 3> walk_record(const PlyElement& element, std::uint64_t r) {
+    std::array<std::size_t, 3> xyz_at{};
+    for (std::size_t k = 0; k < element.properties.size(); ++k) {
+      const PlyProperty& property = element.properties[k];
+      if (!property.is_list) {
+        const std::size_t at = take(element, r, ply_size(property.type));
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          if (header_.xyz[axis] == k) xyz_at[axis] = at;
+        }
+        continue;
+      }
+      const std::size_t at = take(element, r, ply_size(property.count_type));
+      const double length = ply_value(property.count_type, data_.data() + at, big_endian_);
+      if (length < 0) {
+        fail_byte(name_, at, "negative list length in element '" + element.name + "'");
+      }
+      const auto bytes = checked_mul(static_cast<std::uint64_t>(length), ply_size(property.type));
+      take(element, r, bytes ? *bytes : std::numeric_limits<std::uint64_t>::max());
+    }
+    return xyz_at;
+  }
+
+  // Steps over the next bytes of record r; returns where they start.
+  std::size_t take(const PlyElement& element, std::uint64_t r, std::uint64_t bytes) {
+    const std::size_t start = pos_;
+    if (bytes > data_.size() - pos_) {
+      fail_byte(name_, pos_,
+                "truncated binary data in element '" + element.name + "' (record " +
+                    std::to_string(r + 1) + " of " + std::to_string(element.count) + ")");
+    }
+    pos_ += static_cast<std::size_t>(bytes);
+    return start;
+  }
+
+  // The vertex whose x, y, z values are at base + offset.
+  void add_vertex(const char* base, const std::array<std::size_t, 3>& offset) {
+    sink_.add(ply_value(xyz_type_[0], base + offset[0], big_endian_),
+              ply_value(xyz_type_[1], base + offset[1], big_endian_),
+              ply_value(xyz_type_[2], base + offset[2], big_endian_));
+  }
+
+  const std::string& name_;
+  const PlyHeader& header_;
+  std::string_view data_;
+  PointSink& sink_;
+  bool big_endian_;
+  std::size_t pos_;                    // the next byte to read
+  std::array<PlyType, 3> xyz_type_{};  // type of x, y, z in the vertex element
+};
+
 void read_ply_binary(const std::string& name, const PlyHeader& header, std::string_view data,
                      PointSink& sink) {
-  const bool big_endian = header.encoding == PlyEncoding::binary_big_endian;
-  std::size_t pos = header.data_offset;
-  for (std::size_t e = 0; e < header.elements.size(); ++e) {
-    const PlyElement& element = header.elements[e];
-    const bool is_vertex = e == header.vertex;
-    std::array<std::size_t, 3> xyz_offset{};  // offset of x, y, z in a vertex record
-    std::array<PlyType, 3> xyz_type{};
-    for (std::size_t axis = 0; axis < 3 && is_vertex; ++axis) {
-      xyz_type[axis] = element.properties[header.xyz[axis]].type;
-    }
-
-    if (const auto stride = ply_fixed_stride(element)) {
-      // Fixed-size records: one bounds check for the whole element.
-      const std::size_t available = data.size() - pos;
-      const auto need = checked_mul(element.count, *stride);
-      if (!need || *need > available) {
-        fail_byte(name, pos,
-                  "truncated binary data (need " + byte_count_text(need) + " bytes of " +
-                      element.name + " data, have " + std::to_string(available) + ")");
-      }
-      if (is_vertex) {
-        for (std::size_t axis = 0; axis < 3; ++axis) {
-          for (std::size_t k = 0; k < header.xyz[axis]; ++k) {
-            xyz_offset[axis] += ply_size(element.properties[k].type);
-          }
-        }
-        const auto n = static_cast<std::size_t>(element.count);
-        sink.reserve(n, n);
-        for (std::size_t i = 0; i < n; ++i) {
-          const char* const record = data.data() + pos + i * *stride;
-          sink.add(ply_value(xyz_type[0], record + xyz_offset[0], big_endian),
-                   ply_value(xyz_type[1], record + xyz_offset[1], big_endian),
-                   ply_value(xyz_type[2], record + xyz_offset[2], big_endian));
-        }
-      }
-      pos += static_cast<std::size_t>(*need);
-      continue;
-    }
-
-    // Records with lists: walk them one property at a time.
-    if (is_vertex) sink.reserve(element.count, (data.size() - pos) / 3);
-    for (std::uint64_t r = 0; r < element.count; ++r) {
-      const auto take = [&](std::uint64_t bytes) {
-        const std::size_t start = pos;
-        if (bytes > data.size() - pos) {
-          fail_byte(name, pos,
-                    "truncated binary data in element '" + element.name + "' (record " +
-                        std::to_string(r + 1) + " of " + std::to_string(element.count) + ")");
-        }
-        pos += static_cast<std::size_t>(bytes);
-        return start;
-      };
-      for (std::size_t k = 0; k < element.properties.size(); ++k) {
-        const PlyProperty& property = element.properties[k];
-        if (!property.is_list) {
-          const std::size_t at = take(ply_size(property.type));
-          for (std::size_t axis = 0; axis < 3 && is_vertex; ++axis) {
-            if (header.xyz[axis] == k) xyz_offset[axis] = at;
-          }
-          continue;
-        }
-        const std::size_t at = take(ply_size(property.count_type));
-        const double length = ply_value(property.count_type, data.data() + at, big_endian);
-        if (length < 0) {
-          fail_byte(name, at, "negative list length in element '" + element.name + "'");
-        }
-        const auto bytes = checked_mul(static_cast<std::uint64_t>(length), ply_size(property.type));
-        take(bytes ? *bytes : std::numeric_limits<std::uint64_t>::max());
-      }
-      if (is_vertex) {
-        sink.add(ply_value(xyz_type[0], data.data() + xyz_offset[0], big_endian),
-                 ply_value(xyz_type[1], data.data() + xyz_offset[1], big_endian),
-                 ply_value(xyz_type[2], data.data() + xyz_offset[2], big_endian));
-      }
-    }
-  }
-  if (pos != data.size()) {
-    fail_byte(name, pos,
-              std::to_string(data.size() - pos) +
-                  " bytes after the last element (binary PLY ends with its data)");
-  }
+  PlyBinaryReader(name, header, data, sink).read();
 }
 
 }  // namespace
