@@ -277,135 +277,183 @@ void print_comparison(const std::vector<std::string>& methods, const std::vector
   }
 }
 
-void run(const BenchOptions& o) {
-  if (o.repeat == 0) throw InvalidSettingsError("--repeat must be at least 1");
-  const std::vector<std::string> method_list = split_commas(o.settings.method);
-  if (method_list.empty()) throw InvalidSettingsError("--method: no method given");
+std::vector<MethodSpec> make_methods(const std::vector<std::string>& names,
+                                     const SettingsOptions& settings) {
+  if (names.empty()) throw InvalidSettingsError("--method: no method given");
   std::vector<MethodSpec> methods;
-  for (const auto& name : method_list) methods.push_back(make_method(name, o.settings));
-  std::optional<Perturbation> perturbation;
-  if (!o.perturb.empty()) {
-    const auto v = parse_numbers(o.perturb, "--perturb");
-    if (v.size() < 2 || v.size() > 3) {
-      throw InvalidSettingsError("--perturb expects TRANS_M,ROT_RAD[,SEED]");
-    }
-    if (v[1] > std::numbers::pi) throw InvalidSettingsError("--perturb: rotation must be <= pi");
-    perturbation = Perturbation{v[0], v[1], v.size() == 3 ? static_cast<std::uint64_t>(v[2]) : 1};
+  for (const auto& name : names) methods.push_back(make_method(name, settings));
+  return methods;
+}
+
+std::optional<Perturbation> parse_perturbation(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  const auto v = parse_numbers(text, "--perturb");
+  if (v.size() < 2 || v.size() > 3) {
+    throw InvalidSettingsError("--perturb expects TRANS_M,ROT_RAD[,SEED]");
   }
+  if (v[1] > std::numbers::pi) throw InvalidSettingsError("--perturb: rotation must be <= pi");
+  return Perturbation{v[0], v[1], v.size() == 3 ? static_cast<std::uint64_t>(v[2]) : 1};
+}
+
+std::vector<Threshold> parse_thresholds(const std::vector<std::string>& texts) {
   std::vector<Threshold> thresholds;
-  for (const auto& s : o.success) {
+  for (const auto& s : texts) {
     const auto v = parse_numbers(s, "--success");
     if (v.size() != 2) throw InvalidSettingsError("--success expects TRANS_M,ROT_DEG");
     thresholds.push_back({v[0], v[1]});
   }
+  return thresholds;
+}
 
-  std::vector<std::pair<std::string, RegistrationPair>> jobs;
-  for (const auto& file : o.pairs_files) {
+// A registration problem and the pairs file it comes from.
+using Job = std::pair<std::string, RegistrationPair>;
+
+std::vector<Job> read_jobs(const std::vector<std::string>& pairs_files) {
+  std::vector<Job> jobs;
+  for (const auto& file : pairs_files) {
     for (auto& p : read_pairs_file(file)) jobs.emplace_back(file, std::move(p));
   }
+  return jobs;
+}
 
-  std::FILE* csv = nullptr;
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> csv_guard(nullptr, &std::fclose);
-  if (!o.csv.empty()) {
-    csv = std::fopen(o.csv.c_str(), "w");
-    if (!csv) throw IoError(o.csv + ": cannot open for writing");
-    csv_guard.reset(csv);
-    write_csv_line(csv, nullptr);  // the header
-  }
+using CsvFile = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
 
-  const bool tty = isatty(STDERR_FILENO) != 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  // One task per (pair, repeat, method), in this order: methods alternate within a repeat, so
-  // that machine noise spreads over all of them.
-  const std::size_t per_pair = o.repeat * methods.size();
-  const std::size_t total = jobs.size() * per_pair;
+// The --csv file with its header written; none without --csv.
+CsvFile open_csv(const std::string& path) {
+  CsvFile csv(nullptr, &std::fclose);
+  if (path.empty()) return csv;
+  csv.reset(std::fopen(path.c_str(), "w"));
+  if (!csv) throw IoError(path + ": cannot open for writing");
+  write_csv_line(csv.get(), nullptr);  // the header
+  return csv;
+}
+
+Row make_row(const Job& job, const std::string& method, std::size_t rep,
+             const Eigen::Matrix4d& T_init, const MethodRun& run) {
+  const auto& [file, pair] = job;
+  const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
+  const RegistrationResult& r = run.result;
+  Row row;
+  row.pairs_file = file;
+  row.line = pair.line;
+  row.source = pair.source.filename().string();
+  row.reference = pair.reference.filename().string();
+  row.source_path = pair.source.string();
+  row.reference_path = pair.reference.string();
+  row.method = method;
+  row.repeat = rep;
+  row.t_err = translation_error(r.T_reference_source, T_gt);
+  row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
+  row.r_err_geo_deg =
+      rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
+  row.init_t_err = translation_error(T_init, T_gt);
+  row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
+  row.build_ms = run.prepare_ms;
+  row.align_ms = r.time_ms;
+  row.iterations = r.iterations;
+  row.points = r.points_processed;
+  row.source_points = run.source_points;
+  row.converged = r.converged;
+  row.degenerate = r.degenerate;
+  row.stop_reason = std::string(to_string(r.stop_reason));
+  return row;
+}
+
+void print_row_header() {
   std::printf("%-4s %-36s %-9s %3s %10s %10s %9s %9s %6s %9s %4s\n", "#",
               "pair (source <- reference)", "method", "rep", "t_err[m]", "r_sum[rad]", "r_geo[deg]",
               "time[ms]", "iters", "points", "conv");
+}
+
+void print_row(const Row& row, std::size_t pair_number) {
+  const std::string name = row.source + " <- " + row.reference;
+  std::printf("%-4zu %-36s %-9s %3zu %10s %10s %9s %9s %6zu %9zu %4s\n", pair_number,
+              name.substr(0, 36).c_str(), row.method.c_str(), row.repeat, fmt(row.t_err).c_str(),
+              fmt(row.r_err_sum).c_str(), fmt(row.r_err_geo_deg).c_str(),
+              fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
+              row.converged ? "yes" : "no");
+  std::fflush(stdout);
+}
+
+// The registrations of a bench run: one task per (pair, repeat, method), in this order: methods
+// alternate within a repeat, so that machine noise spreads over all of them. Rows are printed
+// (and written to the CSV) in task order.
+class BenchTasks {
+ public:
+  BenchTasks(const BenchOptions& o, const std::vector<MethodSpec>& methods,
+             const std::optional<Perturbation>& perturbation, std::vector<Job> jobs, std::FILE* csv)
+      : o_(o),
+        methods_(methods),
+        perturbation_(perturbation),
+        jobs_(std::move(jobs)),
+        csv_(csv),
+        per_pair_(o.repeat * methods.size()),
+        total_(jobs_.size() * per_pair_) {
+    rows_.reserve(total_);
+  }
+
+  [[nodiscard]] std::size_t total() const { return total_; }
+  [[nodiscard]] double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+  // Runs every task on `threads` threads; the rows, in task order.
+  const std::vector<Row>& run(std::size_t threads) {
+    if (threads <= 1) {
+      for (std::size_t task = 0; task < total_; ++task) emit(run_task(task), task);
+    } else {
+      run_parallel(threads);
+    }
+    return rows_;
+  }
+
+ private:
   // Clouds are read once, on first use, under a lock (the registrations run outside it).
-  std::mutex cache_mutex;
-  std::map<std::string, PointCloud> cloud_cache;
-  const auto cloud = [&](const std::filesystem::path& path, const char* role) -> const PointCloud& {
+  const PointCloud& cloud(const std::filesystem::path& path, const char* role) {
     const std::string key = path.lexically_normal().string();
-    const std::lock_guard lock(cache_mutex);
-    auto it = cloud_cache.find(key);
-    if (it == cloud_cache.end())
-      it = cloud_cache.emplace(key, load_cloud(key, role, false, o.depth)).first;
+    const std::lock_guard lock(cache_mutex_);
+    auto it = cloud_cache_.find(key);
+    if (it == cloud_cache_.end())
+      it = cloud_cache_.emplace(key, load_cloud(key, role, false, o_.depth)).first;
     return it->second;  // std::map nodes never move
-  };
-  const auto run_task = [&](std::size_t task) {
-    const std::size_t j = task / per_pair;
-    const std::size_t rep = (task % per_pair) / methods.size();
-    const auto& [file, pair] = jobs[j];
+  }
+
+  Row run_task(std::size_t task) {
+    const std::size_t j = task / per_pair_;
+    const std::size_t rep = (task % per_pair_) / methods_.size();
+    const RegistrationPair& pair = jobs_[j].second;
     const PointCloud& source = cloud(pair.source, "source");
     const PointCloud& reference_cloud = cloud(pair.reference, "reference");
-    const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
-    const Eigen::Matrix4d T_init = perturbation
-                                       ? perturbed(T_gt, *perturbation, j * 1000003ULL + rep)
-                                       : Eigen::Matrix4d::Identity();
-    MethodSpec m = methods[task % methods.size()];
+    const Eigen::Matrix4d T_init =
+        perturbation_ ? perturbed(pair.T_reference_source_gt, *perturbation_, j * 1000003ULL + rep)
+                      : Eigen::Matrix4d::Identity();
+    MethodSpec m = methods_[task % methods_.size()];
     m.sgd.seed += rep;
     const MethodRun run = run_method(m, source, reference_cloud, T_init);
-    const RegistrationResult& r = run.result;
-    Row row;
-    row.pairs_file = file;
-    row.line = pair.line;
-    row.source = pair.source.filename().string();
-    row.reference = pair.reference.filename().string();
-    row.source_path = pair.source.string();
-    row.reference_path = pair.reference.string();
-    row.method = m.name;
-    row.repeat = rep;
-    row.t_err = translation_error(r.T_reference_source, T_gt);
-    row.r_err_sum = rotation_error_euler_sum(r.T_reference_source, T_gt);
-    row.r_err_geo_deg =
-        rotation_error_geodesic(r.T_reference_source, T_gt) * 180.0 / std::numbers::pi;
-    row.init_t_err = translation_error(T_init, T_gt);
-    row.init_r_geo_deg = rotation_error_geodesic(T_init, T_gt) * 180.0 / std::numbers::pi;
-    row.build_ms = run.prepare_ms;
-    row.align_ms = r.time_ms;
-    row.iterations = r.iterations;
-    row.points = r.points_processed;
-    row.source_points = run.source_points;
-    row.converged = r.converged;
-    row.degenerate = r.degenerate;
-    row.stop_reason = std::string(to_string(r.stop_reason));
-    return row;
-  };
-  std::vector<Row> rows;
-  rows.reserve(total);
-  const auto emit = [&](Row row, std::size_t task) {
-    const std::size_t j = task / per_pair;
-    const std::string name = row.source + " <- " + row.reference;
-    std::printf("%-4zu %-36s %-9s %3zu %10s %10s %9s %9s %6zu %9zu %4s\n", j + 1,
-                name.substr(0, 36).c_str(), row.method.c_str(), row.repeat, fmt(row.t_err).c_str(),
-                fmt(row.r_err_sum).c_str(), fmt(row.r_err_geo_deg).c_str(),
-                fmt(row.build_ms + row.align_ms, 4).c_str(), row.iterations, row.points,
-                row.converged ? "yes" : "no");
-    std::fflush(stdout);
-    if (csv) write_csv_line(csv, &row);
-    rows.push_back(std::move(row));
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (elapsed > 3.0 || tty) {
-      std::fprintf(stderr, "[bench] %zu/%zu registrations, %.0f s elapsed\n", rows.size(), total,
+    return make_row(jobs_[j], m.name, rep, T_init, run);
+  }
+
+  void emit(Row row, std::size_t task) {
+    print_row(row, task / per_pair_ + 1);
+    if (csv_) write_csv_line(csv_, &row);
+    rows_.push_back(std::move(row));
+    const double elapsed = elapsed_s();
+    if (elapsed > 3.0 || tty_) {
+      std::fprintf(stderr, "[bench] %zu/%zu registrations, %.0f s elapsed\n", rows_.size(), total_,
                    elapsed);
     }
-  };
+  }
 
-  const std::size_t threads = std::min(o.jobs, std::max<std::size_t>(total, 1));
-  if (threads <= 1) {
-    for (std::size_t task = 0; task < total; ++task) emit(run_task(task), task);
-  } else {
-    // Throughput mode: independent registrations on `threads` workers (each builds its own
-    // KD-tree); rows are printed in task order as soon as they and all before them are done.
-    std::vector<std::optional<Row>> done(total);
+  // Throughput mode: independent registrations on `threads` workers (each builds its own
+  // KD-tree); rows are printed in task order as soon as they and all before them are done.
+  void run_parallel(std::size_t threads) {
+    std::vector<std::optional<Row>> done(total_);
     std::exception_ptr failure;
     std::atomic<std::size_t> next{0};
     std::mutex done_mutex;
     std::condition_variable ready;
     const auto worker = [&] {
-      for (std::size_t task = next++; task < total; task = next++) {
+      for (std::size_t task = next++; task < total_; task = next++) {
         std::optional<Row> row;
         std::exception_ptr error;
         try {
@@ -415,14 +463,14 @@ void run(const BenchOptions& o) {
         }
         const std::lock_guard lock(done_mutex);
         if (error && !failure) failure = error;
-        if (error) next = total;  // stop handing out tasks
+        if (error) next = total_;  // stop handing out tasks
         done[task] = std::move(row);
         ready.notify_one();
       }
     };
     std::vector<std::jthread> pool;
     for (std::size_t t = 0; t < threads; ++t) pool.emplace_back(worker);
-    for (std::size_t task = 0; task < total; ++task) {
+    for (std::size_t task = 0; task < total_; ++task) {
       std::unique_lock lock(done_mutex);
       ready.wait(lock, [&] { return done[task].has_value() || failure; });
       if (!done[task]) break;
@@ -433,9 +481,24 @@ void run(const BenchOptions& o) {
     pool.clear();  // joins
     if (failure) std::rethrow_exception(failure);
   }
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
+  const BenchOptions& o_;
+  const std::vector<MethodSpec>& methods_;
+  const std::optional<Perturbation>& perturbation_;
+  const std::vector<Job> jobs_;
+  std::FILE* const csv_;
+  const std::size_t per_pair_;
+  const std::size_t total_;
+  const bool tty_ = isatty(STDERR_FILENO) != 0;
+  const std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+  std::mutex cache_mutex_;
+  std::map<std::string, PointCloud> cloud_cache_;
+  std::vector<Row> rows_;
+};
+
+// One summary per method, in the order of --method.
+void print_method_summaries(const std::vector<MethodSpec>& methods, const std::vector<Row>& rows,
+                            const std::string& preset, const std::vector<Threshold>& thresholds) {
   for (const MethodSpec& m : methods) {
     std::vector<const Row*> mine;
     for (const auto& r : rows) {
@@ -443,13 +506,31 @@ void run(const BenchOptions& o) {
     }
     std::string label = "method " + m.name;
     if (m.stochastic) {
-      label += ", " + o.settings.preset + " settings, optimizer " +
+      label += ", " + preset + " settings, optimizer " +
                std::string(to_string(m.sgd.optimizer.type)) +
                ", m = " + std::to_string(m.sgd.batch_size) +
                (m.sgd.cap_batch_to_source ? " (capped for small sources)" : "");
     }
     print_summary(label, mine, thresholds);
   }
+}
+
+void run(const BenchOptions& o) {
+  if (o.repeat == 0) throw InvalidSettingsError("--repeat must be at least 1");
+  const std::vector<std::string> method_list = split_commas(o.settings.method);
+  const std::vector<MethodSpec> methods = make_methods(method_list, o.settings);
+  const std::optional<Perturbation> perturbation = parse_perturbation(o.perturb);
+  const std::vector<Threshold> thresholds = parse_thresholds(o.success);
+  std::vector<Job> jobs = read_jobs(o.pairs_files);
+  const CsvFile csv = open_csv(o.csv);
+
+  BenchTasks tasks(o, methods, perturbation, std::move(jobs), csv.get());
+  print_row_header();
+  const std::size_t threads = std::min(o.jobs, std::max<std::size_t>(tasks.total(), 1));
+  const std::vector<Row>& rows = tasks.run(threads);
+  const double wall_s = tasks.elapsed_s();
+
+  print_method_summaries(methods, rows, o.settings.preset, thresholds);
   if (methods.size() > 1) print_comparison(method_list, rows, thresholds);
   std::printf(
       "\nthroughput: %zu registrations in %s s wall time on %zu thread(s) = %s per second "

@@ -201,6 +201,97 @@ AbsoluteTrajectoryError print_evaluation(const std::vector<Eigen::Matrix4d>& est
   return ate;
 }
 
+// Registers frame `i`, or records it as skipped when it cannot be read; returns whether it could.
+bool register_or_skip(Odometry& odometry, const FrameSource& source, std::size_t i) {
+  try {
+    odometry.register_frame(source.read(i));
+    return true;
+  } catch (const IoError& e) {
+    odometry.skip_frame(std::string("unreadable: ") + e.what());
+  } catch (const FormatError& e) {
+    odometry.skip_frame(std::string("unreadable: ") + e.what());
+  }
+  return false;
+}
+
+// Runs the odometry over the first `frames` frames, with a failure line per failed frame and
+// the progress on stderr (unless --quiet); returns the number of unreadable frames.
+std::size_t register_frames(const OdometryOptions& o, const FrameSource& source, std::size_t frames,
+                            Odometry& odometry, std::chrono::steady_clock::time_point start) {
+  auto last_progress = start;
+  std::size_t unreadable = 0;
+  for (std::size_t i = 0; i < frames; ++i) {
+    if (!register_or_skip(odometry, source, i)) ++unreadable;
+    const FrameReport& r = odometry.reports().back();
+    if (r.failed && !o.quiet) {
+      std::cerr << "frame " << i << " (" << source.frames[i].filename().string()
+                << "): FAILED, predicted pose used: " << r.message << '\n';
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (!o.quiet && (now - last_progress > std::chrono::seconds(1) || i + 1 == frames)) {
+      const double s = std::chrono::duration<double>(now - start).count();
+      std::cerr << "\r" << i + 1 << "/" << frames << " frames, " << std::fixed
+                << std::setprecision(1) << static_cast<double>(i + 1) / s << " frames/s"
+                << std::defaultfloat << (i + 1 == frames ? "\n" : "") << std::flush;
+      last_progress = now;
+    }
+  }
+  return unreadable;
+}
+
+// The trajectory files: KITTI poses, TUM (timestamps from the source, else frame / rate), report.
+void write_outputs(const OdometryOptions& o, const FrameSource& source, std::size_t frames,
+                   double rate_hz, const Odometry& odometry) {
+  write_kitti_poses(o.poses_out, odometry.poses());
+  if (!o.tum.empty()) {
+    std::vector<double> times = frame_times_s(source, frames);
+    if (times.empty()) {
+      for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
+    }
+    write_tum_trajectory(o.tum, odometry.poses(), times);
+  }
+  if (!o.report.empty()) write_report_csv(o.report, source, odometry.reports());
+}
+
+// The run in numbers: frames, failures, time per frame, map size, files written.
+void print_run_summary(const OdometryOptions& o, const std::string& method,
+                       const FrameSource& source, std::size_t frames, std::size_t unreadable,
+                       const Odometry& odometry, std::chrono::steady_clock::time_point start) {
+  std::vector<double> times_ms;
+  std::size_t failed = 0;
+  for (const auto& r : odometry.reports()) {
+    times_ms.push_back(r.time_ms);
+    failed += r.failed ? 1 : 0;
+  }
+  const double total_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::cout << std::setprecision(4) << "method: " << method << ", layout: " << source.layout
+            << ", voxel " << odometry.voxel_size_m() << " m\n"
+            << "frames: " << frames << ", failed: " << failed << " (unreadable: " << unreadable
+            << "), time per frame: median " << median_of(times_ms) << " ms, max "
+            << *std::max_element(times_ms.begin(), times_ms.end()) << " ms, "
+            << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
+            << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
+            << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
+            << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum) << '\n';
+}
+
+// The errors against the ground truth when given, and the picture when asked for.
+void evaluate_and_draw(const OdometryOptions& o, const std::vector<Eigen::Matrix4d>& poses,
+                       const std::optional<GroundTruth>& truth) {
+  if (truth) {
+    std::vector<Eigen::Matrix4d> compared;
+    for (const std::size_t k : truth->frames) compared.push_back(poses[k]);
+    const AbsoluteTrajectoryError ate = print_evaluation(compared, truth->poses);
+    if (!o.picture.empty()) {
+      render_trajectories_png(o.picture, compared, truth->poses, ate.T_truth_estimate);
+    }
+  } else if (!o.picture.empty()) {
+    render_trajectories_png(o.picture, poses, {}, Eigen::Matrix4d::Identity());
+  }
+  if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
+}
+
 void run(const OdometryOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   const OdometrySettings settings = odometry_settings(o);
@@ -218,75 +309,14 @@ void run(const OdometryOptions& o) {
 
   Odometry odometry(settings, method.name, method.sgd, method.batch);
   const auto start = std::chrono::steady_clock::now();
-  auto last_progress = start;
-  std::size_t unreadable = 0;
-  for (std::size_t i = 0; i < frames; ++i) {
-    try {
-      odometry.register_frame(source.read(i));
-    } catch (const IoError& e) {
-      odometry.skip_frame(std::string("unreadable: ") + e.what());
-      ++unreadable;
-    } catch (const FormatError& e) {
-      odometry.skip_frame(std::string("unreadable: ") + e.what());
-      ++unreadable;
-    }
-    const FrameReport& r = odometry.reports().back();
-    if (r.failed && !o.quiet) {
-      std::cerr << "frame " << i << " (" << source.frames[i].filename().string()
-                << "): FAILED, predicted pose used: " << r.message << '\n';
-    }
-    const auto now = std::chrono::steady_clock::now();
-    if (!o.quiet && (now - last_progress > std::chrono::seconds(1) || i + 1 == frames)) {
-      const double s = std::chrono::duration<double>(now - start).count();
-      std::cerr << "\r" << i + 1 << "/" << frames << " frames, " << std::fixed
-                << std::setprecision(1) << static_cast<double>(i + 1) / s << " frames/s"
-                << std::defaultfloat << (i + 1 == frames ? "\n" : "") << std::flush;
-      last_progress = now;
-    }
-  }
+  const std::size_t unreadable = register_frames(o, source, frames, odometry, start);
   if (unreadable == frames) {
     throw FormatError(
         o.input + ": no frame could be read (first: " + odometry.reports().front().message + ")");
   }
-
-  write_kitti_poses(o.poses_out, odometry.poses());
-  if (!o.tum.empty()) {
-    std::vector<double> times = frame_times_s(source, frames);
-    if (times.empty()) {
-      for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
-    }
-    write_tum_trajectory(o.tum, odometry.poses(), times);
-  }
-  if (!o.report.empty()) write_report_csv(o.report, source, odometry.reports());
-
-  std::vector<double> times_ms;
-  std::size_t failed = 0;
-  for (const auto& r : odometry.reports()) {
-    times_ms.push_back(r.time_ms);
-    failed += r.failed ? 1 : 0;
-  }
-  const double total_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::cout << std::setprecision(4) << "method: " << method.name << ", layout: " << source.layout
-            << ", voxel " << odometry.voxel_size_m() << " m\n"
-            << "frames: " << frames << ", failed: " << failed << " (unreadable: " << unreadable
-            << "), time per frame: median " << median_of(times_ms) << " ms, max "
-            << *std::max_element(times_ms.begin(), times_ms.end()) << " ms, "
-            << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
-            << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
-            << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
-            << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum) << '\n';
-  if (truth) {
-    std::vector<Eigen::Matrix4d> compared;
-    for (const std::size_t k : truth->frames) compared.push_back(odometry.poses()[k]);
-    const AbsoluteTrajectoryError ate = print_evaluation(compared, truth->poses);
-    if (!o.picture.empty()) {
-      render_trajectories_png(o.picture, compared, truth->poses, ate.T_truth_estimate);
-    }
-  } else if (!o.picture.empty()) {
-    render_trajectories_png(o.picture, odometry.poses(), {}, Eigen::Matrix4d::Identity());
-  }
-  if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
+  write_outputs(o, source, frames, rate_hz, odometry);
+  print_run_summary(o, method.name, source, frames, unreadable, odometry, start);
+  evaluate_and_draw(o, odometry.poses(), truth);
 }
 
 }  // namespace

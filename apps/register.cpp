@@ -80,8 +80,8 @@ void print_uncertainty(const RegistrationResult& r) {
   }
 }
 
-void run(const RegisterOptions& o) {
-  const MethodSpec method = make_method(o.settings.method, o.settings);
+// The option checks that need the method: before any file is read.
+void check_options(const RegisterOptions& o, const MethodSpec& method) {
   if (!o.picture.empty()) check_picture_name(o.picture);
   const UncertaintyType uncertainty = method.sgd.uncertainty.method;
   if (!o.samples.empty() && uncertainty != UncertaintyType::sgld &&
@@ -89,16 +89,11 @@ void run(const RegisterOptions& o) {
     throw InvalidSettingsError("--samples " + o.samples +
                                ": only --uncertainty sgld or svgd draws samples");
   }
-  const Eigen::Matrix4d T_init =
-      o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
-  std::optional<Eigen::Matrix4d> T_gt;
-  if (!o.ground_truth.empty()) T_gt = parse_transform_option(o.ground_truth, "--ground-truth");
-  const PointCloud source = load_cloud(o.source, "source", !o.json, o.depth);
-  const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json, o.depth);
-  const MethodRun run = run_method(method, source, reference_cloud, T_init, !o.trace.empty());
-  const RegistrationResult& result = run.result;
-  const double build_ms = run.prepare_ms;
+}
 
+// The files asked for: transform, trace, samples, aligned cloud, picture.
+void write_outputs(const RegisterOptions& o, const PointCloud& source,
+                   const PointCloud& reference_cloud, const RegistrationResult& result) {
   if (!o.output.empty()) write_transform(o.output, result.T_reference_source);
   if (!o.trace.empty()) write_trace_csv(o.trace, result);
   if (!o.samples.empty()) write_samples(o.samples, result);
@@ -109,20 +104,26 @@ void run(const RegisterOptions& o) {
   if (!o.picture.empty()) {
     render_alignment_png(o.picture, reference_cloud, source, result.T_reference_source);
   }
+}
 
-  if (o.json) {
-    nlohmann::json j = result_to_json(result);
-    j["build_ms"] = build_ms;
-    j["method"] = method.name;
-    if (T_gt) {
-      j["translation_error_m"] = translation_error(result.T_reference_source, *T_gt);
-      j["rotation_error_euler_rad"] = rotation_error_euler_sum(result.T_reference_source, *T_gt);
-      j["rotation_error_geodesic_deg"] =
-          rotation_error_geodesic(result.T_reference_source, *T_gt) * 180.0 / std::numbers::pi;
-    }
-    std::cout << j.dump(2) << '\n';
-    return;
+void print_json(const MethodSpec& method, const MethodRun& run,
+                const std::optional<Eigen::Matrix4d>& T_gt) {
+  const RegistrationResult& result = run.result;
+  nlohmann::json j = result_to_json(result);
+  j["build_ms"] = run.prepare_ms;
+  j["method"] = method.name;
+  if (T_gt) {
+    j["translation_error_m"] = translation_error(result.T_reference_source, *T_gt);
+    j["rotation_error_euler_rad"] = rotation_error_euler_sum(result.T_reference_source, *T_gt);
+    j["rotation_error_geodesic_deg"] =
+        rotation_error_geodesic(result.T_reference_source, *T_gt) * 180.0 / std::numbers::pi;
   }
+  std::cout << j.dump(2) << '\n';
+}
+
+// The transform, convergence, points, inliers and times, as text.
+void print_result(const MethodSpec& method, const MethodRun& run, std::size_t source_size) {
+  const RegistrationResult& result = run.result;
   std::cout << "method: " << method.name << "\nT_reference_source =\n"
             << format_transform(result.T_reference_source);
   std::cout << std::setprecision(4) << "converged: " << (result.converged ? "yes" : "no") << " ("
@@ -136,7 +137,7 @@ void run(const RegisterOptions& o) {
             << " reference points registered"
             << (result.voxel_size_m > 0.0
                     ? " (voxel grid " + format_number(result.voxel_size_m) + " m, from " +
-                          std::to_string(source.size()) + " source points)"
+                          std::to_string(source_size) + " source points)"
                     : std::string(" (every point)"))
             << "\n"
             << "inliers: " << result.inliers << " of " << result.evaluated_points << " ("
@@ -144,25 +145,25 @@ void run(const RegisterOptions& o) {
             << std::setprecision(4) << result.final_max_distance_m << " m, inlier RMSE "
             << result.inlier_rmse_m << " m\n"
             << "time: " << std::setprecision(1) << result.time_ms << " ms registration + "
-            << build_ms << " ms preparation (kd-tree"
+            << run.prepare_ms << " ms preparation (kd-tree"
             << (result.voxel_size_m > 0.0 || method.random_ratio ? ", downsampling" : "")
             << (!method.stochastic && (needs_reference_normals(method.batch.cost) ||
                                        needs_covariances(method.batch.cost))
                     ? ", normals/covariances"
                     : "")
             << ")\n";
-  if (T_gt) {
-    std::cout << std::setprecision(4) << "error vs ground truth: translation "
-              << translation_error(result.T_reference_source, *T_gt) << " m, rotation "
-              << rotation_error_geodesic(result.T_reference_source, *T_gt) * 180.0 /
-                     std::numbers::pi
-              << " deg (geodesic), " << rotation_error_euler_sum(result.T_reference_source, *T_gt)
-              << " rad (sum of |d roll|, |d pitch|, |d yaw|)\n";
-  }
-  if (method.sgd.uncertainty.method != UncertaintyType::none && result.uncertainty_pairs > 0) {
-    print_uncertainty(result);
-  }
-  if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
+}
+
+void print_ground_truth_errors(const Eigen::Matrix4d& T_reference_source,
+                               const Eigen::Matrix4d& T_gt) {
+  std::cout << std::setprecision(4) << "error vs ground truth: translation "
+            << translation_error(T_reference_source, T_gt) << " m, rotation "
+            << rotation_error_geodesic(T_reference_source, T_gt) * 180.0 / std::numbers::pi
+            << " deg (geodesic), " << rotation_error_euler_sum(T_reference_source, T_gt)
+            << " rad (sum of |d roll|, |d pitch|, |d yaw|)\n";
+}
+
+void warn_if_doubtful(const RegistrationResult& result) {
   if (result.degenerate) {
     std::cerr << "warning: degenerate geometry (constraint ratio " << result.constraint_ratio
               << "): the transform is not constrained along some motion\n";
@@ -170,6 +171,32 @@ void run(const RegisterOptions& o) {
   if (!result.converged) {
     std::cerr << "warning: the registration did not converge: " << result.message << '\n';
   }
+}
+
+void run(const RegisterOptions& o) {
+  const MethodSpec method = make_method(o.settings.method, o.settings);
+  check_options(o, method);
+  const Eigen::Matrix4d T_init =
+      o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
+  std::optional<Eigen::Matrix4d> T_gt;
+  if (!o.ground_truth.empty()) T_gt = parse_transform_option(o.ground_truth, "--ground-truth");
+  const PointCloud source = load_cloud(o.source, "source", !o.json, o.depth);
+  const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json, o.depth);
+  const MethodRun run = run_method(method, source, reference_cloud, T_init, !o.trace.empty());
+  const RegistrationResult& result = run.result;
+  write_outputs(o, source, reference_cloud, result);
+
+  if (o.json) {
+    print_json(method, run, T_gt);
+    return;
+  }
+  print_result(method, run, source.size());
+  if (T_gt) print_ground_truth_errors(result.T_reference_source, *T_gt);
+  if (method.sgd.uncertainty.method != UncertaintyType::none && result.uncertainty_pairs > 0) {
+    print_uncertainty(result);
+  }
+  if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
+  warn_if_doubtful(result);
 }
 
 }  // namespace

@@ -31,32 +31,40 @@ Eigen::Vector3d reference_normal(const ReferenceIndex& reference, std::uint32_t 
   return detail::estimate_surface(reference, index, stored, scratch).normal.cast<double>();
 }
 
-}  // namespace
+// A source point moved into the reference frame and its nearest reference point.
+struct Pair {
+  Eigen::Vector3d moved;
+  std::uint32_t reference_index;
+};
 
-void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
-                        double max_distance_m, const EvaluationSettings& settings,
-                        RegistrationResult& result, const ReferenceNormals& normals) {
+// The source under the transform being evaluated, in floats as the index stores the reference.
+struct MovedSource {
+  const PointCloud& cloud;
+  Eigen::Matrix3f R_reference_source;
+  Eigen::Vector3f t_reference_source_m;
+  float max_sq;  // squared pair distance limit, m^2
+
+  [[nodiscard]] std::size_t size() const { return cloud.size(); }
+  [[nodiscard]] Eigen::Vector3f point(std::size_t i) const {
+    return R_reference_source * cloud.points[i] + t_reference_source_m;
+  }
+};
+
+// Counts the inliers among `samples` spread source points and fills evaluated_points, inliers,
+// inlier_ratio and inlier_rmse_m; returns the pairs when `keep_pairs` (for the degeneracy check).
+std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex& reference,
+                                std::size_t samples, bool keep_pairs, RegistrationResult& result) {
   const std::size_t n = source.size();
-  const std::size_t samples =
-      settings.evaluation_points == 0 ? n : std::min(n, settings.evaluation_points);
-  const Eigen::Matrix3f r = result.T_reference_source.topLeftCorner<3, 3>().cast<float>();
-  const Eigen::Vector3f t = result.T_reference_source.topRightCorner<3, 1>().cast<float>();
-  const auto max_sq = static_cast<float>(max_distance_m * max_distance_m);
-
-  struct Pair {
-    Eigen::Vector3d moved;
-    std::uint32_t reference_index;
-  };
   std::vector<Pair> pairs;
   double sum_sq = 0.0;
   result.evaluated_points = 0;
   for (std::size_t k = 0; k < samples; ++k) {
     const std::size_t i = sample_index(k, samples, n);
     ++result.evaluated_points;
-    const Eigen::Vector3f moved = r * source.points[i] + t;
-    if (const auto nn = reference.nearest(moved, max_sq)) {
+    const Eigen::Vector3f moved = source.point(i);
+    if (const auto nn = reference.nearest(moved, source.max_sq)) {
       sum_sq += nn->squared_distance;
-      if (settings.check_degeneracy) pairs.push_back({moved.cast<double>(), nn->index});
+      if (keep_pairs) pairs.push_back({moved.cast<double>(), nn->index});
       ++result.inliers;
     }
   }
@@ -66,40 +74,35 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
           : 0.0;
   result.inlier_rmse_m =
       result.inliers > 0 ? std::sqrt(sum_sq / static_cast<double>(result.inliers)) : 0.0;
+  return pairs;
+}
 
-  if (!settings.check_degeneracy) return;
-  // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
-  // draws its own sample then.
-  const std::size_t wanted = std::min(n, settings.degeneracy_pairs);
-  if (samples < wanted) {
-    pairs.clear();
-    for (std::size_t k = 0; k < wanted; ++k) {
-      const Eigen::Vector3f moved = r * source.points[sample_index(k, wanted, n)] + t;
-      if (const auto nn = reference.nearest(moved, max_sq)) {
-        pairs.push_back({moved.cast<double>(), nn->index});
-      }
+// The pairs of `wanted` spread source points within the distance limit.
+std::vector<Pair> sample_pairs(const MovedSource& source, const ReferenceIndex& reference,
+                               std::size_t wanted) {
+  std::vector<Pair> pairs;
+  for (std::size_t k = 0; k < wanted; ++k) {
+    const Eigen::Vector3f moved = source.point(sample_index(k, wanted, source.size()));
+    if (const auto nn = reference.nearest(moved, source.max_sq)) {
+      pairs.push_back({moved.cast<double>(), nn->index});
     }
   }
-  if (pairs.size() < 6) {
-    result.degenerate = true;
-    result.constraint_ratio = 0.0;
-    result.message += "; degenerate: fewer than 6 pairs in the final alignment";
-    return;
-  }
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : pairs) centroid += p.moved;
-  centroid /= static_cast<double>(pairs.size());
-  // Lever arms in units of the pairs' RMS spread, so that a rotation moves the points about as
-  // much as a unit translation and the eigenvalues of both kinds compare.
-  double spread_sq = 0.0;
-  for (const auto& p : pairs) spread_sq += (p.moved - centroid).squaredNorm();
-  const double spread = std::sqrt(spread_sq / static_cast<double>(pairs.size()));
-  if (!(spread > 0.0)) {
-    result.degenerate = true;
-    result.constraint_ratio = 0.0;
-    result.message += "; degenerate: all pairs at one point";
-    return;
-  }
+  return pairs;
+}
+
+void mark_degenerate(RegistrationResult& result, const char* why) {
+  result.degenerate = true;
+  result.constraint_ratio = 0.0;
+  result.message += why;
+}
+
+// The 6x6 information matrix of point-to-plane constraints at (a spread sample of) the pairs,
+// rotations about `centroid` with lever arms in units of `spread`.
+Eigen::Matrix<double, 6, 6> constraint_matrix(const std::vector<Pair>& pairs,
+                                              const Eigen::Vector3d& centroid, double spread,
+                                              const ReferenceIndex& reference,
+                                              const EvaluationSettings& settings,
+                                              const ReferenceNormals& normals) {
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
   std::vector<Neighbor> scratch;
   NeighborhoodSettings neighborhood;
@@ -117,6 +120,31 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
     j << normal, q.cross(normal);
     h.noalias() += j * j.transpose();
   }
+  return h;
+}
+
+// Fills constraint_ratio and degenerate from the pairs of the final alignment.
+void check_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& reference,
+                      const EvaluationSettings& settings, const ReferenceNormals& normals,
+                      RegistrationResult& result) {
+  if (pairs.size() < 6) {
+    mark_degenerate(result, "; degenerate: fewer than 6 pairs in the final alignment");
+    return;
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : pairs) centroid += p.moved;
+  centroid /= static_cast<double>(pairs.size());
+  // Lever arms in units of the pairs' RMS spread, so that a rotation moves the points about as
+  // much as a unit translation and the eigenvalues of both kinds compare.
+  double spread_sq = 0.0;
+  for (const auto& p : pairs) spread_sq += (p.moved - centroid).squaredNorm();
+  const double spread = std::sqrt(spread_sq / static_cast<double>(pairs.size()));
+  if (!(spread > 0.0)) {
+    mark_degenerate(result, "; degenerate: all pairs at one point");
+    return;
+  }
+  const Eigen::Matrix<double, 6, 6> h =
+      constraint_matrix(pairs, centroid, spread, reference, settings, normals);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(h, Eigen::EigenvaluesOnly);
   const double largest = eig.eigenvalues()[5];
   result.constraint_ratio = largest > 0.0 ? std::max(0.0, eig.eigenvalues()[0]) / largest : 0.0;
@@ -129,6 +157,28 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                   result.constraint_ratio, settings.degenerate_below);
     result.message += note;
   }
+}
+
+}  // namespace
+
+void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
+                        double max_distance_m, const EvaluationSettings& settings,
+                        RegistrationResult& result, const ReferenceNormals& normals) {
+  const std::size_t n = source.size();
+  const std::size_t samples =
+      settings.evaluation_points == 0 ? n : std::min(n, settings.evaluation_points);
+  const MovedSource moved_source{source,
+                                 result.T_reference_source.topLeftCorner<3, 3>().cast<float>(),
+                                 result.T_reference_source.topRightCorner<3, 1>().cast<float>(),
+                                 static_cast<float>(max_distance_m * max_distance_m)};
+  std::vector<Pair> pairs =
+      count_inliers(moved_source, reference, samples, settings.check_degeneracy, result);
+  if (!settings.check_degeneracy) return;
+  // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
+  // draws its own sample then.
+  const std::size_t wanted = std::min(n, settings.degeneracy_pairs);
+  if (samples < wanted) pairs = sample_pairs(moved_source, reference, wanted);
+  check_degeneracy(pairs, reference, settings, normals, result);
 }
 
 }  // namespace sgdicp

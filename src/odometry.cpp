@@ -258,14 +258,7 @@ Eigen::Matrix4d Odometry::skip_frame(const std::string& message) {
 Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   const double started = now_ms();
   if (!poses_.empty() && !frame.empty() && frame.points == previous_points_) {
-    FrameReport report;
-    report.repeated = report.converged = true;
-    report.message = "repeated frame (identical to the previous one): the previous pose";
-    report.T_first_frame = poses_.back();
-    const Eigen::Matrix4d motion = last_motion_;
-    const Eigen::Matrix4d T = finish(report, PointCloud{}, started);
-    last_motion_ = motion;  // the motion goes on; the frame says nothing about it
-    return T;
+    return repeat_previous_pose(started);
   }
   previous_points_ = frame.points;
   const PointCloud cropped = crop_range(frame, settings_.min_range_m, settings_.max_range_m);
@@ -307,21 +300,42 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   const Eigen::Matrix4d T_guess = report.T_first_frame;
   RegistrationResult r;
   try {
-    if (stochastic) {
-      SgdSettings s = sgd_;
-      if (settings_.adaptive_threshold) s.max_correspondence_distance = Distance::metres(3 * sigma);
-      if (settings_.step_within_threshold) cap_step(s, index);
-      r = align(source, index, s, T_guess);
-    } else {
-      BatchSettings b = batch_;
-      if (settings_.adaptive_threshold) b.max_correspondence_distance = Distance::metres(3 * sigma);
-      r = align_batch(source, index, b, T_guess);
-    }
+    r = align_to_map(source, index, sigma, T_guess);
   } catch (const InvalidInputError& e) {
     report.failed = true;
     report.message = std::string("registration refused the frame: ") + e.what();
     return finish(report, map_frame, started);
   }
+  judge_registration(r, T_guess, report);
+  return finish(report, map_frame, started);
+}
+
+Eigen::Matrix4d Odometry::repeat_previous_pose(double started_ms) {
+  FrameReport report;
+  report.repeated = report.converged = true;
+  report.message = "repeated frame (identical to the previous one): the previous pose";
+  report.T_first_frame = poses_.back();
+  const Eigen::Matrix4d motion = last_motion_;
+  const Eigen::Matrix4d T = finish(report, PointCloud{}, started_ms);
+  last_motion_ = motion;  // the motion goes on; the frame says nothing about it
+  return T;
+}
+
+RegistrationResult Odometry::align_to_map(const PointCloud& source, const ReferenceIndex& index,
+                                          double sigma_m, const Eigen::Matrix4d& T_guess) const {
+  if (method_->solver == Solver::sgd) {
+    SgdSettings s = sgd_;
+    if (settings_.adaptive_threshold) s.max_correspondence_distance = Distance::metres(3 * sigma_m);
+    if (settings_.step_within_threshold) cap_step(s, index);
+    return align(source, index, s, T_guess);
+  }
+  BatchSettings b = batch_;
+  if (settings_.adaptive_threshold) b.max_correspondence_distance = Distance::metres(3 * sigma_m);
+  return align_batch(source, index, b, T_guess);
+}
+
+void Odometry::judge_registration(const RegistrationResult& r, const Eigen::Matrix4d& T_guess,
+                                  FrameReport& report) {
   report.converged = r.converged;
   report.iterations = r.iterations;
   report.inlier_ratio = r.inlier_ratio;
@@ -343,7 +357,6 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     report.T_first_frame = r.T_reference_source;
     threshold_->update(rigid_inverse(T_guess) * r.T_reference_source);
   }
-  return finish(report, map_frame, started);
 }
 
 Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame,

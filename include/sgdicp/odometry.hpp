@@ -25,6 +25,9 @@
 
 namespace sgdicp {
 
+class ReferenceIndex;       // nearest_neighbor.hpp
+struct RegistrationResult;  // result.hpp
+
 /// The settings of the odometry pipeline (the registration step has its own: SgdSettings or
 /// BatchSettings). Lengths with a 0 default are derived from the first frame's extent (auto).
 struct OdometrySettings {
@@ -156,6 +159,16 @@ class Odometry {
  private:
   void start(const PointCloud& cropped);
   [[nodiscard]] Eigen::Matrix4d predicted() const;
+  /// A frame identical to the previous one: the previous pose, the motion model kept.
+  Eigen::Matrix4d repeat_previous_pose(double started_ms);
+  /// The registration step of a frame to the map (d_max 3 sigma when adaptive).
+  [[nodiscard]] RegistrationResult align_to_map(const PointCloud& source,
+                                                const ReferenceIndex& index, double sigma_m,
+                                                const Eigen::Matrix4d& T_guess) const;
+  /// Takes the registration's pose into the report, or marks the frame failed when it did not
+  /// converge or moved beyond the bounds per frame.
+  void judge_registration(const RegistrationResult& r, const Eigen::Matrix4d& T_guess,
+                          FrameReport& report);
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
 
   OdometrySettings settings_;
