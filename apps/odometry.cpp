@@ -220,12 +220,14 @@ std::size_t register_frames(const OdometryOptions& o, const FrameSource& source,
                             Odometry& odometry, std::chrono::steady_clock::time_point start) {
   auto last_progress = start;
   std::size_t unreadable = 0;
+  bool progress_open = false;  // a progress line without its newline is on stderr
   for (std::size_t i = 0; i < frames; ++i) {
     if (!register_or_skip(odometry, source, i)) ++unreadable;
     const FrameReport& r = odometry.reports().back();
     if (r.failed && !o.quiet) {
-      std::cerr << "frame " << i << " (" << source.frames[i].filename().string()
+      std::cerr << (progress_open ? "\n" : "") << "frame " << i << " (" << source.frames[i].filename().string()
                 << "): FAILED, predicted pose used: " << r.message << '\n';
+      progress_open = false;
     }
     const auto now = std::chrono::steady_clock::now();
     if (!o.quiet && (now - last_progress > std::chrono::seconds(1) || i + 1 == frames)) {
@@ -234,6 +236,7 @@ std::size_t register_frames(const OdometryOptions& o, const FrameSource& source,
                 << std::setprecision(1) << static_cast<double>(i + 1) / s << " frames/s"
                 << std::defaultfloat << (i + 1 == frames ? "\n" : "") << std::flush;
       last_progress = now;
+      progress_open = i + 1 != frames;
     }
   }
   return unreadable;
@@ -304,6 +307,7 @@ void run(const OdometryOptions& o) {
   const double rate_hz =
       o.rate_hz > 0.0 ? o.rate_hz : (source.nominal_rate_hz > 0.0 ? source.nominal_rate_hz : 10.0);
   const std::size_t frames = o.max_frames ? std::min(o.max_frames, source.size()) : source.size();
+  if (frames == 0) throw InvalidInputError(o.input + ": no frames to register");
   std::optional<GroundTruth> truth;
   if (!o.ground_truth.empty()) truth = load_ground_truth(o, source, frames);
 
