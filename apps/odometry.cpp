@@ -225,7 +225,8 @@ std::size_t register_frames(const OdometryOptions& o, const FrameSource& source,
     if (!register_or_skip(odometry, source, i)) ++unreadable;
     const FrameReport& r = odometry.reports().back();
     if (r.failed && !o.quiet) {
-      std::cerr << (progress_open ? "\n" : "") << "frame " << i << " (" << source.frames[i].filename().string()
+      std::cerr << (progress_open ? "\n" : "") << "frame " << i << " ("
+                << source.frames[i].filename().string()
                 << "): FAILED, predicted pose used: " << r.message << '\n';
       progress_open = false;
     }
