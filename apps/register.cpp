@@ -68,9 +68,10 @@ void write_samples(const std::string& path, const RegistrationResult& r) {
 // The standard deviations of theta, from the covariance's diagonal.
 void print_uncertainty(const RegistrationResult& r) {
   const auto sd = [&](int k) { return std::sqrt(r.covariance(k, k)); };
-  std::cout << std::defaultfloat << std::setprecision(3) << "std (x, y, z) [m]: " << sd(0) << ' ' << sd(1) << ' '
-            << sd(2) << ", std (roll, pitch, yaw) [deg]: " << sd(3) * 180.0 / std::numbers::pi
-            << ' ' << sd(4) * 180.0 / std::numbers::pi << ' ' << sd(5) * 180.0 / std::numbers::pi
+  std::cout << std::defaultfloat << std::setprecision(3) << "std (x, y, z) [m]: " << sd(0) << ' '
+            << sd(1) << ' ' << sd(2)
+            << ", std (roll, pitch, yaw) [deg]: " << sd(3) * 180.0 / std::numbers::pi << ' '
+            << sd(4) * 180.0 / std::numbers::pi << ' ' << sd(5) * 180.0 / std::numbers::pi
             << " (correlation factor " << r.correlation_factor << ", " << r.uncertainty_ms
             << " ms)\n";
   if (r.modes.size() > 1) {
