@@ -605,7 +605,7 @@ cp "$tmp/pairs_dir/pairs.txt" "$tmp/pairs_dir/pairs_bad.txt"
 printf 'missing.xyz ../ref_copy.xyz 1 0 0 0 0 1 0 0 0 0 1 0\n' >>"$tmp/pairs_dir/pairs_bad.txt"
 expect_error "bench --jobs 2 with a missing cloud in the second pair" 'missing|no such|cannot' \
   bench "$tmp/pairs_dir/pairs_bad.txt" --jobs 2 --repeat 4
-# --threads: the threads of one registration (its KD-tree build) give the same result.
+# --threads: the threads of one registration (voxel grid passes, KD-tree build) give the same result.
 run bench "$tmp/pairs_dir/pairs.txt" --method sgd,sgd-plane --repeat 2 --threads 2 --csv "$tmp/thr.csv"
 run bench "$tmp/pairs_dir/pairs.txt" --method sgd,sgd-plane --repeat 2 --threads 1 --csv "$tmp/thr1.csv"
 if [ "$rc" -eq 0 ] && [ "$(cut -d, -f1-10 "$tmp/thr1.csv")" = "$(cut -d, -f1-10 "$tmp/thr.csv")" ]; then
