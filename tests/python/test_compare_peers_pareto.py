@@ -12,6 +12,9 @@ import pytest
 
 from conftest import REPO_ROOT
 
+# The fake pairs files have no voxel size of their own: the peers' warning is expected.
+pytestmark = pytest.mark.filterwarnings("ignore:peers. no voxel size:UserWarning")
+
 SCRIPT = REPO_ROOT / "bench" / "compare_peers.py"
 # The columns of runs.csv the Pareto report reads (compare_peers.row_of writes more).
 RUN_COLUMNS = ["pairs_file", "line", "method", "family", "rep", "status", "time_ms", "translation_error_m",
