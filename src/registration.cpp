@@ -309,9 +309,10 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
       min_source_points(settings),
       settings.cap_batch_to_source ? "the smallest mini-batch" : "the mini-batch size",
       detail::SurfaceEstimation::lazy);
-  // The run's own copy: m capped for a small source (cap_batch_to_source).
+  // The run's own copy: m capped and Gauss-Newton steps for a small source.
   SgdSettings run_settings = settings;
   run_settings.batch_size = batch_size_for(settings, src.cloud().size());
+  run_settings.optimizer = optimizer_for(settings, src.cloud().size());
   RegistrationResult result;
   detail::record_clouds(result, src.cloud(), voxel_m, reference);
   const UnitCubeScaling scaling = detail::scaling_of(

@@ -19,6 +19,7 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   SgdSettings s;
   s.batch_size = 160;
   s.cap_batch_to_source = false;
+  s.small_source_gauss_newton = false;
   s.max_correspondence_distance = Distance::scaled(0.5);
   s.optimizer.type = optimizer;
   // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
@@ -35,11 +36,34 @@ SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   return s;
 }
 
+namespace {
+std::size_t window_of(const SgdSettings& settings) {
+  return std::max<std::size_t>(settings.convergence.window, 1);
+}
+}  // namespace
+
+bool is_small_source(const SgdSettings& settings, std::size_t source_points) {
+  return 2 * source_points < settings.batch_size * window_of(settings);
+}
+
 std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_points) {
-  if (!settings.cap_batch_to_source) return settings.batch_size;
-  const std::size_t window = std::max<std::size_t>(settings.convergence.window, 1);
+  if (!settings.cap_batch_to_source || !is_small_source(settings, source_points)) {
+    return settings.batch_size;
+  }
+  const std::size_t window = window_of(settings);
   const std::size_t twice_per_window = (2 * source_points + window - 1) / window;
-  return std::min(settings.batch_size, std::max(kMinCappedBatch, twice_per_window));
+  return std::max(kMinCappedBatch, twice_per_window);
+}
+
+OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_points) {
+  if (!settings.small_source_gauss_newton || settings.optimizer != SgdSettings{}.optimizer ||
+      !is_small_source(settings, source_points)) {
+    return settings.optimizer;
+  }
+  OptimizerSettings gauss_newton = settings.optimizer;
+  gauss_newton.type = OptimizerType::gauss_newton;
+  gauss_newton.learning_rate = default_learning_rate(OptimizerType::gauss_newton);
+  return gauss_newton;
 }
 
 std::size_t min_source_points(const SgdSettings& settings) {
@@ -353,6 +377,14 @@ std::vector<Setting<S>> step_settings() {
            "",
            "Small sources: cap m at 2 x source points / window (at least 32) so that a "
            "convergence window sees each point about twice (false: m always, the paper)"}),
+      setting<S, &S::small_source_gauss_newton>(
+          {"small-source-gauss-newton",
+           "small_source_gauss_newton",
+           {},
+           "",
+           "Small sources (fewer than batch-size x window / 2 points): the coarse stage takes "
+           "Gauss-Newton steps while the optimizer is the default Adam (false: the optimizer "
+           "always, the paper)"}),
       setting<S, &S::max_correspondence_distance>(
           {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
       setting<S, &S::max_iterations>(

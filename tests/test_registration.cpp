@@ -436,5 +436,55 @@ TEST(SmallSource, CapsTheMiniBatch) {
   EXPECT_LT(capped.points_processed, full.points_processed / 2);
 }
 
+// Small sources take Gauss-Newton steps in the coarse stage while the optimizer is the default;
+// large sources, an optimizer set by the user and paper() keep theirs.
+TEST(SmallSource, TakesGaussNewtonStepsWithTheDefaultOptimizer) {
+  const SgdSettings s;
+  EXPECT_TRUE(is_small_source(s, 1599));
+  EXPECT_FALSE(is_small_source(s, 1600));
+  EXPECT_EQ(optimizer_for(s, 361).type, OptimizerType::gauss_newton);
+  EXPECT_EQ(optimizer_for(s, 361).learning_rate,
+            default_learning_rate(OptimizerType::gauss_newton));
+  EXPECT_EQ(optimizer_for(s, 1600), s.optimizer);
+  EXPECT_EQ(optimizer_for(SgdSettings::paper(OptimizerType::adam), 361).type, OptimizerType::adam);
+  SgdSettings chosen;
+  chosen.optimizer.learning_rate = 0.02;
+  EXPECT_EQ(optimizer_for(chosen, 361), chosen.optimizer);
+  SgdSettings off;
+  off.small_source_gauss_newton = false;
+  EXPECT_EQ(optimizer_for(off, 361), off.optimizer);
+}
+
+// The real bunny (361 source points), its 34 deg start turned a further 25 deg about three
+// axes: Gauss-Newton coarse steps solve every start with fewer mini-batches than Adam and at
+// least its rotation accuracy (measured: 120 against 180-330 iterations, 0.25-0.27 deg against
+// 0.35-0.42 deg over 20 random 30-60 deg starts; docs/design.md, *Small sources*).
+TEST(SmallSource, GaussNewtonSolvesTheBunnyFasterThanAdam) {
+  const auto file = test::shared_data("pairs/pcl_bunny.txt");
+  SKIP_WITHOUT(file);
+  const RegistrationPair pair = read_pairs_file(file).front();
+  const PointCloud source = read_point_cloud(pair.source).cloud;
+  const PointCloud reference = read_point_cloud(pair.reference).cloud;
+  SgdSettings adam;
+  adam.small_source_gauss_newton = false;
+  const std::vector<Eigen::Vector3d> axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+                                             Eigen::Vector3d(1, 1, 1).normalized()};
+  for (const Eigen::Vector3d& axis : axes) {
+    Eigen::Matrix4d turn = Eigen::Matrix4d::Identity();
+    turn.topLeftCorner<3, 3>() = Eigen::AngleAxisd(25 * kDeg, axis).toRotationMatrix();
+    // T_init = turn^-1 starts the pose 25 deg farther from the truth than the identity would.
+    const Eigen::Matrix4d T_init = turn.inverse();
+    const RegistrationResult gn = align(source, reference, SgdSettings{}, T_init);
+    const RegistrationResult ad = align(source, reference, adam, T_init);
+    const Eigen::Matrix4d& T_gt = pair.T_reference_source_gt;
+    EXPECT_TRUE(gn.converged) << gn.message;
+    EXPECT_LT(translation_error(gn.T_reference_source, T_gt), 0.002);
+    EXPECT_LT(rotation_error_geodesic(gn.T_reference_source, T_gt), 0.5 * kDeg);
+    EXPECT_LT(gn.iterations, ad.iterations);
+    EXPECT_LE(rotation_error_geodesic(gn.T_reference_source, T_gt),
+              rotation_error_geodesic(ad.T_reference_source, T_gt) + 0.05 * kDeg);
+  }
+}
+
 }  // namespace
 }  // namespace sgdicp

@@ -39,6 +39,12 @@ struct SgdSettings {
   /// performance.md). Sources of at least batch_size x window / 2 points (1,600 by default) keep
   /// m; false keeps it always (the paper).
   bool cap_batch_to_source = true;
+  /// Small sources (the same ones: fewer than batch_size x window / 2 points) take Gauss-Newton
+  /// steps in the coarse stage while `optimizer` is the default Adam (optimizer_for): on the
+  /// bunny moved 30-90 deg it is as robust as Adam or more, 1.5x more precise in rotation and
+  /// needs 120 instead of 180-700 mini-batches (docs/design.md, *Small sources*). A step rule
+  /// set by the user is kept; false keeps `optimizer` always (the paper).
+  bool small_source_gauss_newton = true;
   /// d_max: pairs farther apart are rejected (paper: 0.5 in scaled units).
   Distance max_correspondence_distance = Distance::scaled(0.5);
   /// Default: Adam with a step of 0.01 scaled units, measured best over the real pairs
@@ -134,6 +140,14 @@ inline constexpr std::size_t kMinCappedBatch = 32;
 /// small sources when cap_batch_to_source says so.
 [[nodiscard]] std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_points);
 
+/// Whether a source of `source_points` points is small: fewer than batch_size x window / 2, so
+/// that m covers it about twice per convergence window.
+[[nodiscard]] bool is_small_source(const SgdSettings& settings, std::size_t source_points);
+/// The coarse stage's step rule on a source of `source_points` points: Gauss-Newton at its own
+/// step for a small source when small_source_gauss_newton says so and `optimizer` is the
+/// default, else `optimizer`.
+[[nodiscard]] OptimizerSettings optimizer_for(const SgdSettings& settings,
+                                              std::size_t source_points);
 /// The fewest source points a run with these settings accepts: batch_size, or with the cap the
 /// smaller of batch_size and kMinCappedBatch.
 [[nodiscard]] std::size_t min_source_points(const SgdSettings& settings);

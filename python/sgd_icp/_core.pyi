@@ -379,6 +379,11 @@ class Settings:
     sees each point about twice (false: m always, the paper). Keyword cap_batch_to_source=.
     Default True.
     """
+    small_source_gauss_newton: bool
+    """Small sources (fewer than batch-size x window / 2 points): the coarse stage takes Gauss-
+    Newton steps while the optimizer is the default Adam (false: the optimizer always, the paper).
+    Keyword small_source_gauss_newton=. Default True.
+    """
     max_correspondence_distance: Distance
     """Correspondence rejection distance d_max, a Distance in [1e-06, 10] scaled units or [1e-06,
     1000000] m. Keyword max_distance=. Default Distance.scaled(0.5).
@@ -469,6 +474,7 @@ class Settings:
         *,
         batch_size: int = ...,
         cap_batch_to_source: bool = ...,
+        small_source_gauss_newton: bool = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         max_distance: _DistanceValue = ...,
@@ -523,6 +529,7 @@ class Settings:
         *,
         batch_size: int = ...,
         cap_batch_to_source: bool = ...,
+        small_source_gauss_newton: bool = ...,
         learning_rate: float = ...,
         max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
@@ -578,6 +585,7 @@ class Settings:
         *,
         batch_size: int = ...,
         cap_batch_to_source: bool = ...,
+        small_source_gauss_newton: bool = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         max_distance: _DistanceValue = ...,
@@ -1025,6 +1033,7 @@ def register(
     *,
     batch_size: int = ...,
     cap_batch_to_source: bool = ...,
+    small_source_gauss_newton: bool = ...,
     optimizer: _OptimizerName = ...,
     learning_rate: float = ...,
     max_distance: _DistanceValue = ...,

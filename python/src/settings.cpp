@@ -602,6 +602,7 @@ void bind_sgd_settings(py::module_& m) {
           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.");
   def_count(settings, "batch_size", &SgdSettings::batch_size, "");
   def_flag(settings, "cap_batch_to_source", &SgdSettings::cap_batch_to_source, "");
+  def_flag(settings, "small_source_gauss_newton", &SgdSettings::small_source_gauss_newton, "");
   def_distance(settings, "max_correspondence_distance", &SgdSettings::max_correspondence_distance,
                "");
   settings
