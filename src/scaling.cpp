@@ -53,6 +53,13 @@ ScalingBox bulk_bounding_box(const PointCloud& cloud) {
   const double margin = kMarginInBulkSizes * bulk_size;
   const Eigen::Vector3d low = bulk.min.array() - margin;
   const Eigen::Vector3d high = bulk.max.array() + margin;
+  // Most clouds have no far point: their whole box, one vectorised pass, is the answer (the
+  // per-point test below was 3 % of a registration on a Kinect frame).
+  const BoundingBox whole = BoundingBox::of(cloud);
+  if ((whole.min.array() >= low.array()).all() && (whole.max.array() <= high.array()).all()) {
+    result.box = whole;
+    return result;
+  }
   for (const auto& point : cloud.points) {
     const Eigen::Vector3d p = point.cast<double>();
     if ((p.array() >= low.array()).all() && (p.array() <= high.array()).all()) {

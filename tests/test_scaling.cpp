@@ -87,6 +87,25 @@ void check_cube(ScalingOrigin origin, double lo, double hi) {
   }
 }
 
+// BoundingBox::of reads the points twelve coordinates at a time: every size (tails of 0-3
+// points), the extremes in any point and any axis, negative coordinates and one point.
+TEST(BoundingBox, OfEqualsThePointByPointBox) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> coordinate(-50.0f, 30.0f);
+  for (std::size_t n = 0; n <= 41; ++n) {
+    PointCloud cloud;
+    BoundingBox expected;
+    for (std::size_t i = 0; i < n; ++i) {
+      cloud.points.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+      expected.extend(cloud.points.back().cast<double>());
+    }
+    const BoundingBox box = BoundingBox::of(cloud);
+    EXPECT_EQ(box.min, expected.min) << n << " points";
+    EXPECT_EQ(box.max, expected.max) << n << " points";
+    EXPECT_EQ(box.valid(), n > 0);
+  }
+}
+
 TEST(UnitCubeScaling, LowerCornerMapsBothCloudsIntoUnitCube) {
   check_cube(ScalingOrigin::lower_corner, 0.0, 1.0);
 }
