@@ -59,8 +59,8 @@ run_asan_ci() {
   done
 }
 
-TSAN_TARGETS=(test_stress test_core test_registration test_preprocessing sgdicp_cli)
-TSAN_TESTS='^(Load\.|NearestNeighborTest\.Concurrent|ReferenceReuse\.|Covariances\.IdenticalForAnyThreadCount|VoxelDownsample\.HalvesMerge)'
+TSAN_TARGETS=(test_stress test_core test_registration test_solver_parts test_preprocessing sgdicp_cli)
+TSAN_TESTS='^(Load\.|HelperThread\.|Threads\.TwoThreads|NearestNeighborTest\.Concurrent|ReferenceReuse\.|Covariances\.IdenticalForAnyThreadCount|VoxelDownsample\.HalvesMerge)'
 
 tsan_bench() {  # the demo pair, twice per method, on two threads
   local pairs=build-tsan/demo_pairs.txt

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <optional>
 
+#include "helper_thread.hpp"
 #include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/evaluation.hpp"
@@ -11,6 +14,7 @@
 #include "sgdicp/preprocessing.hpp"
 #include "sgdicp/sampler.hpp"
 #include "sgdicp/scaling.hpp"
+#include "sgdicp/threads.hpp"
 #include "sgdicp/uncertainty.hpp"
 #include "solver_support.hpp"
 
@@ -49,6 +53,9 @@ class MiniBatchPairing {
         kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())) {
     pairs_.reserve(settings.batch_size);
     use_cost(settings.cost);
+    if (resolve_thread_count(settings.num_threads) >= 2) {
+      helper_ = std::make_unique<detail::HelperThread>();
+    }
   }
 
   [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
@@ -70,10 +77,11 @@ class MiniBatchPairing {
     CostAccumulator cost(settings_.kernel, kernel_scale_, with_hessian);
     const double k = scaling_.scale();
     const auto d_max_sq_m = static_cast<float>(d_max_scaled * k * d_max_scaled * k);
+    find_pairs(batch, pose, d_max_sq_m);
     if (plain_) {
-      add_point_to_point(batch, pose, d_max_sq_m, cost, distances);
+      add_point_to_point(pose, cost, distances);
     } else {
-      collect(batch, pose, d_max_sq_m);
+      std::erase_if(pairs_, [](const Pair& pair) { return pair.reference_index == kNoPair; });
       trim();
       add_general(pose, cost, distances);
     }
@@ -81,35 +89,46 @@ class MiniBatchPairing {
   }
 
  private:
-  // The paper's pair cost without kernel or trimming: the short path of the hot loop. Kept
-  // apart so that the compiler inlines its small Eigen products (measured with callgrind).
-  void add_point_to_point(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
-                          float d_max_sq_m, CostAccumulator& cost,
-                          std::vector<float>& distances) const {
-    const PointCloud& ref = reference_.cloud();
+  static constexpr std::uint32_t kNoPair = std::numeric_limits<std::uint32_t>::max();
+  // Below this many points a batch's queries are not worth handing half to the helper thread.
+  static constexpr std::size_t kMinSplitBatch = 32;
+
+  // Lines 3-5 for every point of the batch, in batch order: moved by the pose and paired with its
+  // nearest reference point within d_max (kNoPair when there is none). The queries are most of
+  // an iteration: with a helper thread each thread makes half of them, into their own slots.
+  void find_pairs(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
+                  float d_max_sq_m) {
     const auto k = static_cast<float>(scaling_.scale());
-    for (const std::uint32_t i : batch) {
-      const Eigen::Vector3d s = scaling_.to_scaled(source_.points[i]);
-      const Eigen::Vector3d moved = pose.transform(s);
-      const auto nn = reference_.nearest(scaling_.to_metric(moved).cast<float>(), d_max_sq_m);
-      if (!nn) continue;
-      const Eigen::Vector3d r = scaling_.to_scaled(ref.points[nn->index]);
-      cost.add_point_to_point(pose.jacobian(s), moved - r);
-      distances.push_back(std::sqrt(nn->squared_distance) / k);
+    pairs_.resize(batch.size());
+    const auto part = [&](std::size_t begin, std::size_t end) {
+      for (std::size_t slot = begin; slot < end; ++slot) {
+        Pair& pair = pairs_[slot];
+        pair.source_index = batch[slot];
+        pair.s = scaling_.to_scaled(source_.points[pair.source_index]);
+        pair.moved = pose.transform(pair.s);
+        const auto nn =
+            reference_.nearest(scaling_.to_metric(pair.moved).cast<float>(), d_max_sq_m);
+        pair.reference_index = nn ? nn->index : kNoPair;
+        pair.distance = nn ? std::sqrt(nn->squared_distance) / k : 0.0f;
+      }
+    };
+    if (helper_ && batch.size() >= kMinSplitBatch) {
+      helper_->split(batch.size(), part);
+    } else {
+      part(0, batch.size());
     }
   }
 
-  void collect(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
-               float d_max_sq_m) {
-    const auto k = static_cast<float>(scaling_.scale());
-    pairs_.clear();
-    for (const std::uint32_t i : batch) {
-      const Eigen::Vector3d s = scaling_.to_scaled(source_.points[i]);
-      const Eigen::Vector3d moved = pose.transform(s);
-      const Eigen::Vector3f query = scaling_.to_metric(moved).cast<float>();
-      if (const auto nn = reference_.nearest(query, d_max_sq_m)) {
-        pairs_.push_back({s, moved, i, nn->index, std::sqrt(nn->squared_distance) / k});
-      }
+  // The paper's pair cost without kernel or trimming: the short path of the hot loop. Kept
+  // apart so that the compiler inlines its small Eigen products (measured with callgrind).
+  void add_point_to_point(const EulerPoseJacobian& pose, CostAccumulator& cost,
+                          std::vector<float>& distances) const {
+    const PointCloud& ref = reference_.cloud();
+    for (const Pair& pair : pairs_) {
+      if (pair.reference_index == kNoPair) continue;
+      const Eigen::Vector3d r = scaling_.to_scaled(ref.points[pair.reference_index]);
+      cost.add_point_to_point(pose.jacobian(pair.s), pair.moved - r);
+      distances.push_back(pair.distance);
     }
   }
 
@@ -156,7 +175,9 @@ class MiniBatchPairing {
   double kernel_scale_;  // scaled
   CostType cost_ = CostType::point_to_point;
   bool plain_ = false;
-  std::vector<Pair> pairs_;
+  std::vector<Pair> pairs_;  // one slot per batch point, then the pairs the cost uses
+  // With num_threads >= 2: the second thread of the batches' queries (helper_thread.hpp).
+  std::unique_ptr<detail::HelperThread> helper_;
 };
 
 // One SGD-ICP run in the scaled space: Algorithm 1, then the refinement stages.

@@ -308,9 +308,9 @@ constexpr std::string_view kDownsampleToHelp =
     "(chosen from the data, +-15 %), applied to both clouds; clouds with at most this many "
     "points, or with normals or covariances given, are used as they are; 0 = no downsampling";
 constexpr std::string_view kThreadsHelp =
-    "Threads of one registration (its voxel grid passes, KD-tree build and, for the SGD plane "
-    "costs, the grid's reference normals; the SGD loop runs on one), 0 = every core; the result "
-    "is the same for any count";
+    "Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs "
+    "the grid's reference normals, and the SGD mini-batches' queries on a second thread), "
+    "0 = every core; the result is the same for any count";
 constexpr std::string_view kNeighborsHelp =
     "Plane costs: neighbours per point (itself included) for normals and covariances";
 constexpr std::string_view kEvaluationHelp =

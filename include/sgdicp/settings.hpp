@@ -100,8 +100,10 @@ struct SgdSettings {
   /// search's counting and the thinning, in two fixed halves), the KD-tree build
   /// (KdTreeSettings::num_threads) and, for a plane cost, the reference normals or covariances
   /// of the grid, estimated there all at once instead of one by one in the run; the source's
-  /// thinning in align(). The SGD loop itself runs on one (docs/performance.md). 0 = every core.
-  /// The result is identical for any count.
+  /// thinning in align(); and with two or more, each mini-batch's nearest-neighbour queries in
+  /// two halves, one on a helper thread (the sums stay in batch order on the caller; the rest
+  /// of the SGD loop runs on one; docs/performance.md). 0 = every core. The result is identical
+  /// for any count.
   std::size_t num_threads = 1;
   /// Voxel-grid downsampling of both clouds before registering (preprocessing.hpp): the voxel
   /// side, metres; 0 = the grid downsample_to chooses.

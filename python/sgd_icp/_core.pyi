@@ -453,9 +453,9 @@ class Settings:
     bounding box of every point). Keyword robust_scaling=. Default True.
     """
     num_threads: int
-    """Threads of one registration (its voxel grid passes, KD-tree build and, for the SGD plane
-    costs, the grid's reference normals; the SGD loop runs on one), 0 = every core; the result is
-    the same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
+    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 = every
+    core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
     """
     voxel_size_m: float
     """Thin both clouds to one point (the centroid) per voxel of this side before registering
@@ -706,9 +706,9 @@ class BatchSettings:
     bounding box of every point). Keyword robust_scaling=. Default True.
     """
     num_threads: int
-    """Threads of one registration (its voxel grid passes, KD-tree build and, for the SGD plane
-    costs, the grid's reference normals; the SGD loop runs on one), 0 = every core; the result is
-    the same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
+    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 = every
+    core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
     """
     voxel_size_m: float
     """Thin both clouds to one point (the centroid) per voxel of this side before registering
