@@ -380,9 +380,9 @@ class Settings:
     Default True.
     """
     small_source_gauss_newton: bool
-    """Small sources (fewer than batch-size x window / 2 points): the coarse stage takes Gauss-
-    Newton steps while the optimizer is the default Adam (false: the optimizer always, the paper).
-    Keyword small_source_gauss_newton=. Default True.
+    """Small sources (fewer than batch-size x window / 2 points): the coarse stage takes
+    Gauss-Newton steps while the optimizer is the default Adam (false: the optimizer always, the
+    paper). Keyword small_source_gauss_newton=. Default True.
     """
     max_correspondence_distance: Distance
     """Correspondence rejection distance d_max, a Distance in [1e-06, 10] scaled units or [1e-06,
@@ -454,8 +454,8 @@ class Settings:
     """
     num_threads: int
     """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
-    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 = every
-    core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 =
+    every core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
     """
     voxel_size_m: float
     """Thin both clouds to one point (the centroid) per voxel of this side before registering
@@ -707,8 +707,8 @@ class BatchSettings:
     """
     num_threads: int
     """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
-    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 = every
-    core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 =
+    every core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
     """
     voxel_size_m: float
     """Thin both clouds to one point (the centroid) per voxel of this side before registering
@@ -1123,11 +1123,11 @@ def register(
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
         batch_size (160, [1, 10000000]), cap_batch_to_source (True),
-        max_distance (Distance.scaled(0.5)), max_iterations (4000, [1, 1000000000]),
-        seed (2019, [0, 2^64-1]), momentum (0.9, [0, 1)), beta1 (0.9, [0, 1)),
-        beta2 (0.999, [0, 1)), rms_decay (0.9, [0, 1)), epsilon (1e-08, (0, 1]),
-        hessian_decay (0.9, [0, 1)), damping (0.001, [0, 100]), window (20, [8, 100000]),
-        chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
+        small_source_gauss_newton (True), max_distance (Distance.scaled(0.5)),
+        max_iterations (4000, [1, 1000000000]), seed (2019, [0, 2^64-1]), momentum (0.9, [0, 1)),
+        beta1 (0.9, [0, 1)), beta2 (0.999, [0, 1)), rms_decay (0.9, [0, 1)),
+        epsilon (1e-08, (0, 1]), hessian_decay (0.9, [0, 1)), damping (0.001, [0, 100]),
+        window (20, [8, 100000]), chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
         translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]),
         refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
         min_distance (Distance.scaled(0.0001)), refine_gauss_newton (True), average (True),
