@@ -497,6 +497,16 @@ class BenchTasks {
 };
 
 // One summary per method, in the order of --method.
+// What the small-source rules change of these settings (settings.hpp), for the summary line.
+std::string small_source_note(const SgdSettings& s) {
+  std::vector<std::string> rules;
+  if (s.cap_batch_to_source) rules.emplace_back("m capped");
+  // optimizer_for a source of no points: the small-source rule's step, if it takes one.
+  if (optimizer_for(s, 0).type != s.optimizer.type) rules.emplace_back("Gauss-Newton coarse steps");
+  if (rules.empty()) return "";
+  return " (small sources: " + (rules.size() == 2 ? rules[0] + ", " + rules[1] : rules[0]) + ")";
+}
+
 void print_method_summaries(const std::vector<MethodSpec>& methods, const std::vector<Row>& rows,
                             const std::string& preset, const std::vector<Threshold>& thresholds) {
   for (const MethodSpec& m : methods) {
@@ -508,8 +518,7 @@ void print_method_summaries(const std::vector<MethodSpec>& methods, const std::v
     if (m.stochastic) {
       label += ", " + preset + " settings, optimizer " +
                std::string(to_string(m.sgd.optimizer.type)) +
-               ", m = " + std::to_string(m.sgd.batch_size) +
-               (m.sgd.cap_batch_to_source ? " (capped for small sources)" : "");
+               ", m = " + std::to_string(m.sgd.batch_size) + small_source_note(m.sgd);
     }
     print_summary(label, mine, thresholds);
   }
