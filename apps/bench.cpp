@@ -496,7 +496,6 @@ class BenchTasks {
   std::vector<Row> rows_;
 };
 
-// One summary per method, in the order of --method.
 // What the small-source rules change of these settings (settings.hpp), for the summary line.
 std::string small_source_note(const SgdSettings& s) {
   std::vector<std::string> rules;
@@ -507,6 +506,7 @@ std::string small_source_note(const SgdSettings& s) {
   return " (small sources: " + (rules.size() == 2 ? rules[0] + ", " + rules[1] : rules[0]) + ")";
 }
 
+// One summary per method, in the order of --method.
 void print_method_summaries(const std::vector<MethodSpec>& methods, const std::vector<Row>& rows,
                             const std::string& preset, const std::vector<Threshold>& thresholds) {
   for (const MethodSpec& m : methods) {

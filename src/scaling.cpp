@@ -47,7 +47,7 @@ ScalingBox bulk_bounding_box(const PointCloud& cloud) {
   const BoundingBox bulk = percentile_box(cloud);
   const double bulk_size = (bulk.max - bulk.min).maxCoeff();
   if (!(bulk_size > 0.0)) {  // the bulk is one point: no size to measure "far" by
-    result.box.extend(cloud);
+    result.box = BoundingBox::of(cloud);
     return result;
   }
   const double margin = kMarginInBulkSizes * bulk_size;

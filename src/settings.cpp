@@ -52,7 +52,7 @@ std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_point
   }
   const std::size_t window = window_of(settings);
   const std::size_t twice_per_window = (2 * source_points + window - 1) / window;
-  return std::max(kMinCappedBatch, twice_per_window);
+  return std::min(settings.batch_size, std::max(kMinCappedBatch, twice_per_window));
 }
 
 OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_points) {

@@ -420,6 +420,9 @@ TEST(SmallSource, CapsTheMiniBatch) {
   EXPECT_EQ(batch_size_for(SgdSettings::paper(), 361), 160u);
   EXPECT_EQ(min_source_points(s), kMinCappedBatch);
   EXPECT_EQ(min_source_points(SgdSettings::paper()), 160u);
+  SgdSettings small_m;  // a batch below kMinCappedBatch is never raised by the cap
+  small_m.batch_size = 16;
+  EXPECT_EQ(batch_size_for(small_m, 100), 16u);
 
   const Eigen::Matrix4d T_gt = make_transform(3 * kDeg, -2 * kDeg, 10 * kDeg, {0.1, -0.05, 0.05});
   const PointCloud reference = synthetic_scene(51, 4000);

@@ -80,7 +80,9 @@ struct BoundingBox {
     max = max.cwiseMax(p);
   }
   void extend(const PointCloud& cloud) {
-    for (const auto& p : cloud.points) extend(p.cast<double>());
+    const BoundingBox box = of(cloud);
+    min = min.cwiseMin(box.min);
+    max = max.cwiseMax(box.max);
   }
   /// The box of a whole cloud (one pass the compiler vectorises; point_cloud.cpp).
   [[nodiscard]] static BoundingBox of(const PointCloud& cloud);
