@@ -3,7 +3,7 @@
 
 usage: eval/calibrate_uncertainty.py [--trials N] [--noise-scale F] [--out DIR] [--datasets LIST]
                                      [--methods LIST] [--particles LIST] [--svgd-iterations N]
-                                     [--svgd-spread S]
+                                     [--svgd-spread S] [--figure PNG]
 
 For each dataset, `--trials` independent problems are drawn from one scene: the scene's points are
 split at random into two halves (source, reference), each half gets its own Gaussian sensor noise
@@ -118,8 +118,75 @@ def error_of(T_est: np.ndarray, T_gt: np.ndarray) -> np.ndarray:
     return e
 
 
-def run(datasets, trials, noise: dict, out: Path, settings: dict) -> str:
+def T_of(theta: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = rpy_matrix(*theta[3:])
+    T[:3, 3] = theta[:3]
+    return T
+
+
+# The 2-D marginals drawn per dataset: translation x-y in mm, rotation pitch-yaw in deg.
+PANELS = (((0, 1), 1e3, "x error (mm)", "y error (mm)"),
+          ((4, 5), np.degrees(1.0), "pitch error (deg)", "yaw error (deg)"))
+CHI2_95_2DOF = 5.991  # the 95 % ellipse of a 2-D Gaussian
+
+
+def ellipse(cov2: np.ndarray, center=(0.0, 0.0)) -> np.ndarray:
+    """Points of the 95 % ellipse of a 2-D covariance (2 x 100)."""
+    vals, vecs = np.linalg.eigh(cov2)
+    t = np.linspace(0, 2 * np.pi, 100)
+    circle = np.vstack([np.cos(t), np.sin(t)]) * np.sqrt(CHI2_95_2DOF * np.maximum(vals, 0))[:, None]
+    return vecs @ circle + np.asarray(center)[:, None]
+
+
+def draw_figure(figure_data: dict, path: Path) -> None:
+    """Per dataset: the actual errors of every trial (dots), the 95 % ellipse of each method's mean
+    reported covariance around zero, and the first trial's samples / particles (as errors)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(figure_data)
+    fig, axes = plt.subplots(len(names), 2, figsize=(11, 4.2 * len(names)), squeeze=False)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for row, name in enumerate(names):
+        errors, mean_covs, first_samples = figure_data[name]
+        for col, (axes_idx, unit, xlabel, ylabel) in enumerate(PANELS):
+            ax = axes[row, col]
+            idx = list(axes_idx)
+            ax.scatter(errors[:, idx[0]] * unit, errors[:, idx[1]] * unit, s=10, c="0.35",
+                       label=f"actual errors ({len(errors)} trials)", zorder=3)
+            actual = errors[:, idx].T @ errors[:, idx] / len(errors)
+            e = ellipse(actual * unit**2)
+            ax.plot(*e, c="k", lw=2.2, ls="--", label="95 % of the actual errors")
+            # The peers' report (naive laplace) and the tempered methods; the rest would clutter.
+            drawn = [m for m in mean_covs if m.endswith("(tempered)") or m == "laplace (naive)"]
+            for k, m in enumerate(drawn):
+                c = colours[k % len(colours)]
+                e = ellipse(mean_covs[m][np.ix_(idx, idx)] * unit**2)
+                ax.plot(*e, c=c, lw=1.6, ls=":" if "naive" in m else "-",
+                        label=f"{m}: mean reported 95 %")
+                if m in first_samples and m.endswith("(tempered)"):
+                    smp = first_samples[m]
+                    ax.scatter(smp[:, idx[0]] * unit, smp[:, idx[1]] * unit, s=9, color=c,
+                               alpha=0.5, marker="x" if m.startswith("svgd") else ".",
+                               label=f"{m}: trial 0 samples")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+            ax.set_title(name)
+            ax.set_aspect("equal", adjustable="datalim")
+            ax.grid(alpha=0.3)
+        axes[row, 1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    print(f"wrote {path}")
+
+
+def run(datasets, trials, noise: dict, out: Path, settings: dict, figure: Path | None) -> str:
     rows, table = [], []
+    figure_data = {}
     for name in datasets:
         rng = np.random.default_rng(2026)
         scene = load_scene(name, rng)
@@ -129,6 +196,7 @@ def run(datasets, trials, noise: dict, out: Path, settings: dict) -> str:
         times = {m: [] for m in settings}
         kappas = []
         base_ms = []
+        first_samples = {}
         for trial in range(trials):
             src, ref, T_gt = draw_problem(scene, noise_m, rng)
             # The reference as register(src, ref) prepares it (its voxel grid of ~20k points):
@@ -144,6 +212,10 @@ def run(datasets, trials, noise: dict, out: Path, settings: dict) -> str:
                 e = error_of(r.T_reference_source, T_gt)
                 errors[m].append(e)
                 covs[m].append(np.array(r.covariance))
+                if trial == 0 and len(r.samples):
+                    # The first trial's samples as errors (theta - theta_gt): a cloud around
+                    # that trial's estimate, to set against the spread of every trial's estimate.
+                    first_samples[m] = np.array([error_of(T_of(x), T_gt) for x in r.samples])
                 nees = float(e @ np.linalg.solve(r.covariance, e))
                 rows.append((name, trial, m, nees, *e, *np.sqrt(np.diag(r.covariance)),
                              r.correlation_factor, times[m][-1], len(r.modes)))
@@ -159,6 +231,8 @@ def run(datasets, trials, noise: dict, out: Path, settings: dict) -> str:
             table.append((name, m, np.mean(nees), np.median(nees), np.mean(nees < CHI2_1SIGMA),
                           np.mean(nees < CHI2_2SIGMA), ratio_t, ratio_r,
                           np.median(times[m]) / np.median(base_ms), np.median(kappas)))
+        figure_data[name] = (np.array(errors[next(iter(settings))]),
+                             {m: np.mean(covs[m], axis=0) for m in settings}, first_samples)
         print(f"{name}: done ({trials} trials)", flush=True)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "calibration.csv", "w") as f:
@@ -181,6 +255,8 @@ def run(datasets, trials, noise: dict, out: Path, settings: dict) -> str:
                      f"{t[6]:.2f} | {t[7]:.2f} | {t[8]:.1f}x | {t[9]:.3g} |")
     text = "\n".join(lines) + "\n"
     (out / "calibration.md").write_text(text)
+    if figure is not None:
+        draw_figure(figure_data, figure)
     return text
 
 
@@ -200,6 +276,9 @@ def main() -> None:
                     help="svgd initial spread in Laplace standard deviations (default: the "
                     "library's)")
     ap.add_argument("--out", type=Path, default=Path("results/uncertainty"))
+    ap.add_argument("--figure", type=Path, default=None,
+                    help="also draw the errors, the mean reported 95 %% ellipses and the first "
+                    "trial's samples per dataset (PNG; e.g. docs/figures/uncertainty_calibration.png)")
     args = ap.parse_args()
     noise = {d: v * args.noise_scale for d, v in NOISE_M.items()}
     settings = methods(args.methods.split(","), [int(k) for k in args.particles.split(",")])
@@ -207,7 +286,7 @@ def main() -> None:
     for kw in settings.values():
         if kw["uncertainty"] == "svgd":
             kw.update({k: v for k, v in svgd_options.items() if v is not None})
-    print(run(args.datasets.split(","), args.trials, noise, args.out, settings))
+    print(run(args.datasets.split(","), args.trials, noise, args.out, settings, args.figure))
 
 
 if __name__ == "__main__":

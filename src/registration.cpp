@@ -363,7 +363,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
         settings.cost,
         run_settings.batch_size,
         settings.seed,
-        theta_init};
+        theta_init,
+        settings.trim_ratio >= 1.0};
     theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);
   }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));

@@ -199,6 +199,42 @@ PoseVector batch_gradient(const UncertaintyProblem& p, const std::vector<std::ui
   return 2.0 * p.batch_cost(batch, theta, false).gradient(1);
 }
 
+// The control variate's g_batch(theta_hat) of every mini-batch. When the batch cost is a sum over
+// its points (no trimming), each point's gradient at the optimum is paired once, and a batch's
+// is the sum of its points': one pairing per iteration instead of two (sgld), K instead of
+// K + 1 (svgd). Otherwise the batch is paired at theta_hat again.
+class OptimumGradients {
+ public:
+  OptimumGradients(const UncertaintyProblem& p, const PoseVector& theta_hat)
+      : p_(p), theta_hat_(theta_hat) {
+    if (!p.additive_batches) return;
+    per_point_.reserve(p.source->size());
+    std::vector<std::uint32_t> one(1);
+    for (std::uint32_t i = 0; i < p.source->size(); ++i) {
+      one[0] = i;
+      per_point_.push_back(batch_gradient(p, one, theta_hat));
+    }
+  }
+  [[nodiscard]] PoseVector operator()(const std::vector<std::uint32_t>& batch) const {
+    if (per_point_.empty()) return batch_gradient(p_, batch, theta_hat_);
+    PoseVector sum = PoseVector::Zero();
+    for (const std::uint32_t i : batch) sum += per_point_[i];
+    return sum;
+  }
+  // The full-data gradient at the optimum, when the points' gradients are known.
+  [[nodiscard]] std::optional<PoseVector> full() const {
+    if (per_point_.empty()) return std::nullopt;
+    PoseVector sum = PoseVector::Zero();
+    for (const PoseVector& g : per_point_) sum += g;
+    return sum;
+  }
+
+ private:
+  const UncertaintyProblem& p_;
+  PoseVector theta_hat_;
+  std::vector<PoseVector> per_point_;
+};
+
 // grad U at theta from one mini-batch, with the control variate of the optimum (Baker et al.
 // 2019): grad U(theta_hat) + N/m (g_batch(theta) - g_batch(theta_hat)), plus the prior's;
 // at_hat = g_batch(theta_hat).
@@ -212,34 +248,52 @@ PoseVector energy_gradient(const UncertaintyProblem& p, const Posterior& post,
          prior_information().cwiseProduct(theta - p.theta_init);
 }
 
+// The space whitened by the Laplace precision P = L L^T: z = L^T (theta - theta_hat), one unit
+// one posterior standard deviation along every axis, so that distances compare translation
+// (scaled units) and rotation (rad) on one scale; gradients map by grad_z = L^-1 grad_theta.
+struct Whitening {
+  PoseVector theta_hat;
+  Eigen::LLT<PoseMatrix> llt;
+  [[nodiscard]] PoseVector theta(const PoseVector& z) const {
+    return theta_hat + llt.matrixU().solve(z);
+  }
+  [[nodiscard]] PoseVector gradient(const PoseVector& grad_theta) const {
+    return llt.matrixL().solve(grad_theta);
+  }
+};
+
 // Pre-conditioned SGLD (Li et al. 2016, eq. 4 without the Gamma term) on the energy
 // U = sum rho / (2 sigma^2 tau) - log prior, whose gradient is estimated on a mini-batch with
-// the control variate of the optimum.
+// the control variate of the optimum. The chain runs in the space whitened by the Laplace
+// precision, where the curvature is about the identity: RMSProp's diagonal alone leaves the
+// correlations between axes (KITTI's rotation and translation), and a step that suits the
+// stiffest axis then mixes the soft directions too slowly (measured: docs/uncertainty.md).
 std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const UncertaintySettings& s,
-                                   const Posterior& post) {
-  // RMSProp's mean square starts at its stationary value, the curvature (E[(grad U)^2] = H_kk
-  // for a Gaussian), so no warm-up is spent on it.
-  PoseVector mean_square = post.precision.diagonal();
-  // eps such that the stiffest axis contracts by `step` per iteration: eps sqrt(H_kk) / 2.
-  const double eps = 2.0 * s.step / std::sqrt(mean_square.maxCoeff());
+                                   const Posterior& post, const Whitening& white,
+                                   const OptimumGradients& at_hat) {
+  // RMSProp's mean square starts at its stationary value, the whitened curvature (E[(grad U)^2]
+  // = 1 for a Gaussian), so no warm-up is spent on it.
+  PoseVector mean_square = PoseVector::Ones();
+  // eps such that every axis contracts by `step` per iteration: eps sqrt(1) / 2.
+  const double eps = 2.0 * s.step;
   constexpr double kDecay = 0.99;  // Li et al. 2016
   EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
   Gaussian normal(p.seed);
   std::vector<std::uint32_t> batch;
   std::vector<PoseVector> samples;
   samples.reserve(s.samples);
-  PoseVector theta = post.theta_hat;
+  PoseVector z = PoseVector::Zero();  // the estimate
   const std::size_t iterations = s.burn_in + s.samples * s.thinning;
   for (std::size_t it = 1; it <= iterations; ++it) {
     sampler.next_batch(p.batch_size, batch);
     const PoseVector grad =
-        energy_gradient(p, post, batch, theta, batch_gradient(p, batch, post.theta_hat));
+        white.gradient(energy_gradient(p, post, batch, white.theta(z), at_hat(batch)));
     mean_square = kDecay * mean_square + (1.0 - kDecay) * grad.cwiseProduct(grad);
     const PoseVector g = mean_square.cwiseSqrt().cwiseInverse();
     for (int k = 0; k < 6; ++k) {
-      theta[k] += -0.5 * eps * g[k] * grad[k] + std::sqrt(eps * g[k]) * normal();
+      z[k] += -0.5 * eps * g[k] * grad[k] + std::sqrt(eps * g[k]) * normal();
     }
-    if (it > s.burn_in && (it - s.burn_in) % s.thinning == 0) samples.push_back(theta);
+    if (it > s.burn_in && (it - s.burn_in) % s.thinning == 0) samples.push_back(white.theta(z));
   }
   return samples;
 }
@@ -275,24 +329,11 @@ std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
   return phi;
 }
 
-// The space whitened by the Laplace precision P = L L^T: z = L^T (theta - theta_hat), one unit
-// one posterior standard deviation along every axis, so that distances compare translation
-// (scaled units) and rotation (rad) on one scale; gradients map by grad_z = L^-1 grad_theta.
-struct Whitening {
-  PoseVector theta_hat;
-  Eigen::LLT<PoseMatrix> llt;
-  [[nodiscard]] PoseVector theta(const PoseVector& z) const {
-    return theta_hat + llt.matrixU().solve(z);
-  }
-  [[nodiscard]] PoseVector gradient(const PoseVector& grad_theta) const {
-    return llt.matrixL().solve(grad_theta);
-  }
-};
-
 // Stein ICP (Maken et al. 2022) in the whitened space, where the kernel's distances are taken.
 // The particles start at N(0, spread^2 I), the Laplace covariance inflated by spread^2. Returns z.
 std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const UncertaintySettings& s,
-                                       const Posterior& post, const Whitening& white) {
+                                       const Posterior& post, const Whitening& white,
+                                       const OptimumGradients& optimum_gradients) {
   EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
   Gaussian normal(p.seed);
   std::vector<PoseVector> z(s.particles);
@@ -304,7 +345,7 @@ std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const Uncert
   const ParticleGradients gradients = [&](const std::vector<PoseVector>& zs,
                                           std::vector<PoseVector>& grads) {
     sampler.next_batch(p.batch_size, batch);
-    const PoseVector at_hat = batch_gradient(p, batch, post.theta_hat);
+    const PoseVector at_hat = optimum_gradients(batch);
     for (std::size_t i = 0; i < zs.size(); ++i) {
       grads[i] = white.gradient(energy_gradient(p, post, batch, white.theta(zs[i]), at_hat));
     }
@@ -449,14 +490,20 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
     const PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
     result.covariance = jm * cov * jm.transpose();
   } else {
+    const OptimumGradients at_hat(p, theta_hat);
     // The control variate needs the full-data gradient of the energy the chain samples, the
     // run's own cost (point-to-point: not the surface information's).
-    if (p.cost == CostType::point_to_point) post.jte_hat = run_cost_gradient(p, s, theta_hat);
+    if (const auto full_gradient = at_hat.full()) {
+      post.jte_hat = *full_gradient;
+    } else if (p.cost == CostType::point_to_point) {
+      post.jte_hat = run_cost_gradient(p, s, theta_hat);
+    }
+    const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
     if (s.method == UncertaintyType::sgld) {
-      fill_from_samples(p, sgld_chain(p, s, post), reported_hat, result);
+      fill_from_samples(p, sgld_chain(p, s, post, white, at_hat), reported_hat, result);
     } else {
-      const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
-      fill_from_particles(p, svgd_particles(p, s, post, white), white, reported_hat, result);
+      fill_from_particles(p, svgd_particles(p, s, post, white, at_hat), white, reported_hat,
+                          result);
     }
   }
   result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();

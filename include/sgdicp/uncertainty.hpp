@@ -112,6 +112,9 @@ struct UncertaintyProblem {
   std::size_t batch_size = 160;
   std::uint64_t seed = 0;
   PoseVector theta_init = PoseVector::Zero();  ///< scaled: the centre of the prior
+  /// The batch cost is a sum over its points (no trimming): the control variate's gradients at
+  /// the optimum are then paired once per point, not once per mini-batch.
+  bool additive_batches = true;
 };
 
 /// Fills covariance, covariance_se3 (sgld, svgd: samples, sample_mean; svgd: modes) of `result` for
