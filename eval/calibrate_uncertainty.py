@@ -180,7 +180,7 @@ def draw_figure(figure_data: dict, path: Path) -> None:
         axes[row, 1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=80)
     print(f"wrote {path}")
 
 

@@ -557,7 +557,8 @@ std::vector<Setting<S>> uncertainty_settings() {
            "uncertainty.step",
            {1e-4, 1.0},
            "",
-           "sgld: step size, as the contraction per iteration along the stiffest axis"}),
+           "sgld: step size, as the contraction per iteration along every axis (in the space "
+           "whitened by the Laplace precision)"}),
       setting<S, &S::uncertainty, &U::particles>(
           {"particles", "uncertainty.particles", {1.0, 1e4}, "", "svgd: particles K"}),
       setting<S, &S::uncertainty, &U::svgd_iterations>(

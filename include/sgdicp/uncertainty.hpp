@@ -4,9 +4,9 @@
 //            point, times the residual variance sigma^2 = sum r^2 / (n - 6), plus a weak prior.
 //   sgld:    Bayesian ICP (Maken, Ramos, Ott, ICRA 2020): pre-conditioned stochastic gradient
 //            Langevin dynamics (RMSProp pre-conditioner, Li et al. 2016) on the mini-batch
-//            gradient of the registration's own pairing, started at the point estimate, with a
-//            control variate at the optimum (Baker et al. 2019) so that the mini-batch noise
-//            does not widen the chain.
+//            gradient of the registration's own pairing, in the space whitened by the Laplace
+//            precision, started at the point estimate, with a control variate at the optimum
+//            (Baker et al. 2019) so that the mini-batch noise does not widen the chain.
 //   svgd:    Stein ICP (Maken, Ramos, Ott, RA-L 2022): Stein variational gradient descent (Liu
 //            and Wang 2016) of K particles on the same energy and mini-batch gradient, one shared
 //            mini-batch per iteration, RBF kernel with the median-heuristic bandwidth in the
@@ -69,9 +69,10 @@ struct UncertaintySettings {
   std::size_t samples = 200;
   /// sgld: iterations discarded before the first sample (measured: docs/uncertainty.md).
   std::size_t burn_in = 50;
-  /// sgld: iterations per kept sample (measured: the autocorrelation time of the stiffest axis).
+  /// sgld: iterations per kept sample (about the autocorrelation time of the whitened axes).
   std::size_t thinning = 5;
-  /// sgld: the step eps, as the contraction per iteration along the stiffest axis (unitless).
+  /// sgld: the step eps, as the contraction per iteration along every axis of the space whitened
+  /// by the Laplace precision (unitless).
   double step = 0.1;
   /// svgd: particles K (measured: docs/uncertainty.md).
   std::size_t particles = 32;

@@ -297,8 +297,8 @@ class UncertaintySettings:
     thinning: int
     """sgld: iterations per sample, in [1, 10000]. Keyword thinning=. Default 5."""
     step: float
-    """sgld: step size, as the contraction per iteration along the stiffest axis, in [0.0001, 1].
-    Keyword sgld_step=. Default 0.1.
+    """sgld: step size, as the contraction per iteration along every axis (in the space whitened by
+    the Laplace precision), in [0.0001, 1]. Keyword sgld_step=. Default 0.1.
     """
     particles: int
     """svgd: particles K, in [1, 10000]. Keyword particles=. Default 32."""
