@@ -16,7 +16,7 @@ compared with the reported covariance P:
   std ratio per block: sqrt(trace of mean P) / sqrt(trace of E[e e^T]) for the translation and
   the rotation blocks (1 when calibrated; < 1 over-confident)
 Datasets: 'synthetic' (a floor, two walls, a box and a ball, 20k points, the unit tests' scene),
-'kitti' (KITTI 00 scan 0, 120k points), 'bunny' (PCL bunny, 36k points), 'kinect' (ETH Kinect
+'kitti' (KITTI 00 scan 0, 120k points), 'bunny' (PCL bunny bun0, 397 points), 'kinect' (ETH Kinect
 map, 38k points): real geometry, so the test is independent of the estimator's own model.
 
 svgd reports the covariance of its heaviest mode; the CSV has its number of modes per trial.

@@ -37,7 +37,7 @@ fi
 pip_install() {
   "$python" -m pip install --quiet --disable-pip-version-check --root-user-action=ignore "$@"
 }
-pip_install pytest numpy
+pip_install pytest numpy scipy matplotlib  # scipy, matplotlib: the eval/ scripts' smoke tests
 # Build requirements (scikit-build-core, pybind11) come from pyproject.toml; the module is built
 # in the build folder, with warnings as errors.
 echo "test: building and installing the Python package (compiles the C++ core again: a few minutes the first time)"

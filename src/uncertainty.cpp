@@ -312,12 +312,21 @@ double median_bandwidth(const std::vector<PoseVector>& z) {
   return *mid > 0.0 ? *mid / std::log(static_cast<double>(z.size()) + 1.0) : 1.0;
 }
 
+// Particles closer than this belong to one mode (kModeLinkDistance, kModeLinkBandwidth).
+double mode_link(const std::vector<PoseVector>& z) {
+  return std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_bandwidth(z)));
+}
+
 // The Stein direction of every particle (Liu and Wang 2016, eq. 8): the kernel-weighted mean of
 // the particles' descent directions plus the kernel's gradient, which repels them from each
-// other.
+// other. While the particles form one mode the bandwidth is the median heuristic's times
+// kSvgdBandwidthScale (its measurement in uncertainty.hpp); over several modes the median is
+// set by the distances between them, and a wider kernel would merge them.
 std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
                                         const std::vector<PoseVector>& grads) {
-  const double h = median_bandwidth(z);
+  const double median = median_bandwidth(z);
+  const bool one_mode = particle_modes(z, mode_link(z)).size() == 1;
+  const double h = one_mode ? kSvgdBandwidthScale * median : median;
   std::vector<PoseVector> phi(z.size(), PoseVector::Zero());
   for (std::size_t i = 0; i < z.size(); ++i) {
     for (std::size_t j = 0; j < z.size(); ++j) {
@@ -394,9 +403,7 @@ void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVect
   fill_from_samples(p, thetas, reported_hat, result);
   result.modes.clear();
   // Particles the kernel cannot tell apart (k > 0.94) share their gradients and move as one.
-  const double link =
-      std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_bandwidth(z)));
-  for (const auto& members : particle_modes(z, link)) {
+  for (const auto& members : particle_modes(z, mode_link(z))) {
     std::vector<PoseVector> poses;
     for (const std::size_t i : members) poses.push_back(result.samples[i]);
     const Moments m = moments_of(poses, poses.front());

@@ -448,7 +448,9 @@ TEST(Svgd, ParticlesSpreadLikeAStandardGaussian) {
   double variance = 0.0;
   for (const PoseVector& zi : out) variance += (zi - mean).squaredNorm() / (6.0 * 63.0);
   EXPECT_LT(mean.norm(), 0.3);
-  EXPECT_GT(variance, 0.4);
+  // 0.92 with the widened kernel; 0.62 with the median heuristic itself (SVGD's variance
+  // collapse in six dimensions).
+  EXPECT_GT(variance, 0.8);
   EXPECT_LT(variance, 1.5);
 }
 

@@ -27,7 +27,7 @@ _KernelName = Union["KernelType", str]
 _UnitName = Union["DistanceUnit", str]
 _DistanceValue = Union[float, "Distance"]
 _MethodName = Literal["sgd", "sgd-plane", "sgd-gicp", "icp", "icp-plane", "gicp"]
-_UncertaintyName = Literal["none", "laplace", "sgld"]
+_UncertaintyName = Literal["none", "laplace", "sgld", "svgd"]
 
 # ---- errors
 

@@ -61,6 +61,20 @@ def test_stubs_match_the_module():
             assert members == runtime_members(obj), name
 
 
+def stub_literal(alias: str) -> list[str]:
+    """The strings of a `NAME = Literal[...]` alias of the stub."""
+    for node in ast.parse(STUB.read_text()).body:
+        if isinstance(node, ast.Assign) and node.targets[0].id == alias:
+            elements = node.value.slice.elts
+            return [e.value for e in elements]
+    raise AssertionError(f"{alias} not in the stub")
+
+
+def test_stub_literals_name_every_choice():
+    # A name list kept by hand in the stub must follow the module's enum (svgd was missing).
+    assert stub_literal("_UncertaintyName") == list(sgd_icp.UncertaintyType.__members__)
+
+
 def test_stub_docstrings_are_the_modules():
     # The stub adds the types; its docstrings are copies of the module's, made by
     # python/tools/sync_stub.py (run it after changing a docstring in the bindings).
