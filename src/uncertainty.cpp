@@ -312,9 +312,10 @@ double median_bandwidth(const std::vector<PoseVector>& z) {
   return *mid > 0.0 ? *mid / std::log(static_cast<double>(z.size()) + 1.0) : 1.0;
 }
 
-// Particles closer than this belong to one mode (kModeLinkDistance, kModeLinkBandwidth).
-double mode_link(const std::vector<PoseVector>& z) {
-  return std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_bandwidth(z)));
+// Particles closer than this belong to one mode (kModeLinkDistance, kModeLinkBandwidth), given
+// the median heuristic's bandwidth of the particles.
+double mode_link(double median_h) {
+  return std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_h));
 }
 
 // The Stein direction of every particle (Liu and Wang 2016, eq. 8): the kernel-weighted mean of
@@ -325,7 +326,7 @@ double mode_link(const std::vector<PoseVector>& z) {
 std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
                                         const std::vector<PoseVector>& grads) {
   const double median = median_bandwidth(z);
-  const bool one_mode = particle_modes(z, mode_link(z)).size() == 1;
+  const bool one_mode = particle_modes(z, mode_link(median)).size() == 1;
   const double h = one_mode ? kSvgdBandwidthScale * median : median;
   std::vector<PoseVector> phi(z.size(), PoseVector::Zero());
   for (std::size_t i = 0; i < z.size(); ++i) {
@@ -403,7 +404,7 @@ void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVect
   fill_from_samples(p, thetas, reported_hat, result);
   result.modes.clear();
   // Particles the kernel cannot tell apart (k > 0.94) share their gradients and move as one.
-  for (const auto& members : particle_modes(z, mode_link(z))) {
+  for (const auto& members : particle_modes(z, mode_link(median_bandwidth(z)))) {
     std::vector<PoseVector> poses;
     for (const std::size_t i : members) poses.push_back(result.samples[i]);
     const Moments m = moments_of(poses, poses.front());
