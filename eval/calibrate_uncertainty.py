@@ -99,13 +99,18 @@ def pose_of(T: np.ndarray) -> np.ndarray:
     return np.r_[T[:3, 3], np.arctan2(r[2, 1], r[2, 2]), pitch, np.arctan2(r[1, 0], r[0, 0])]
 
 
+def T_of(theta: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = rpy_matrix(*theta[3:])
+    T[:3, 3] = theta[:3]
+    return T
+
+
 def draw_problem(scene: np.ndarray, noise_m: float, rng: np.random.Generator):
     half = rng.permutation(len(scene))
     src, ref = scene[half[: len(scene) // 2]], scene[half[len(scene) // 2:]]
     theta = np.r_[rng.uniform(-0.05, 0.05, 3), np.deg2rad(rng.uniform(-2, 2, 3))]
-    T_gt = np.eye(4)
-    T_gt[:3, :3] = rpy_matrix(*theta[3:])
-    T_gt[:3, 3] = theta[:3]
+    T_gt = T_of(theta)
     src = (src - T_gt[:3, 3]) @ T_gt[:3, :3]  # T_gt^-1 p for row vectors: reference = T_gt src
     src = src + rng.normal(0, noise_m, src.shape)
     ref = ref + rng.normal(0, noise_m, ref.shape)
@@ -118,25 +123,19 @@ def error_of(T_est: np.ndarray, T_gt: np.ndarray) -> np.ndarray:
     return e
 
 
-def T_of(theta: np.ndarray) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3] = rpy_matrix(*theta[3:])
-    T[:3, 3] = theta[:3]
-    return T
-
-
 # The 2-D marginals drawn per dataset: translation x-y in mm, rotation pitch-yaw in deg.
 PANELS = (((0, 1), 1e3, "x error (mm)", "y error (mm)"),
           ((4, 5), np.degrees(1.0), "pitch error (deg)", "yaw error (deg)"))
 CHI2_95_2DOF = 5.991  # the 95 % ellipse of a 2-D Gaussian
 
 
-def ellipse(cov2: np.ndarray, center=(0.0, 0.0)) -> np.ndarray:
-    """Points of the 95 % ellipse of a 2-D covariance (2 x 100)."""
+def ellipse_xy(mean2, cov2, radius: float, n: int = 100) -> np.ndarray:
+    """(n, 2) points of the Mahalanobis-radius contour of a 2-D Gaussian (a semi-definite
+    covariance gives a flat ellipse)."""
     vals, vecs = np.linalg.eigh(cov2)
-    t = np.linspace(0, 2 * np.pi, 100)
-    circle = np.vstack([np.cos(t), np.sin(t)]) * np.sqrt(CHI2_95_2DOF * np.maximum(vals, 0))[:, None]
-    return vecs @ circle + np.asarray(center)[:, None]
+    t = np.linspace(0, 2 * np.pi, n)
+    circle = np.c_[np.cos(t), np.sin(t)] * (radius * np.sqrt(np.maximum(vals, 0)))
+    return np.asarray(mean2) + circle @ vecs.T
 
 
 def draw_figure(figure_data: dict, path: Path) -> None:
@@ -158,13 +157,14 @@ def draw_figure(figure_data: dict, path: Path) -> None:
             ax.scatter(errors[:, idx[0]] * unit, errors[:, idx[1]] * unit, s=10, c="0.35",
                        label=f"actual errors ({len(errors)} trials)", zorder=3)
             actual = errors[:, idx].T @ errors[:, idx] / len(errors)
-            e = ellipse(actual * unit**2)
+            e = ellipse_xy(np.zeros(2), actual * unit**2, np.sqrt(CHI2_95_2DOF)).T
             ax.plot(*e, c="k", lw=2.2, ls="--", label="95 % of the actual errors")
             # The peers' report (naive laplace) and the tempered methods; the rest would clutter.
             drawn = [m for m in mean_covs if m.endswith("(tempered)") or m == "laplace (naive)"]
             for k, m in enumerate(drawn):
                 c = colours[k % len(colours)]
-                e = ellipse(mean_covs[m][np.ix_(idx, idx)] * unit**2)
+                e = ellipse_xy(np.zeros(2), mean_covs[m][np.ix_(idx, idx)] * unit**2,
+                               np.sqrt(CHI2_95_2DOF)).T
                 ax.plot(*e, c=c, lw=1.6, ls=":" if "naive" in m else "-",
                         label=f"{m}: mean reported 95 %")
                 if m in first_samples and m.endswith("(tempered)"):

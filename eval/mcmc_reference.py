@@ -546,12 +546,6 @@ def write_csv(rows, path: Path) -> None:
                     + "\n")
 
 
-def ellipse_xy(mean2, cov2, radius: float = 2.0, n: int = 100) -> np.ndarray:
-    """Points of the Mahalanobis-radius contour of a 2-D Gaussian."""
-    a = np.linspace(0, 2 * np.pi, n)
-    return mean2 + radius * np.c_[np.cos(a), np.sin(a)] @ np.linalg.cholesky(cov2).T
-
-
 def plot(figure_data: dict, path: Path) -> None:
     import matplotlib
     matplotlib.use("Agg")
@@ -577,13 +571,14 @@ def plot(figure_data: dict, path: Path) -> None:
                        edgecolor="k", linewidth=0.4, label="svgd particles")
             for pairing, mc in data["references"].items():
                 colour, style = reference_style[pairing]
-                xy = ellipse_xy(mc["mean"][ix] * unit, mc["cov"][np.ix_(ix, ix)] * unit**2)
+                xy = cal.ellipse_xy(mc["mean"][ix] * unit, mc["cov"][np.ix_(ix, ix)] * unit**2,
+                                    2.0)
                 note = "" if mc["rhat"].max() < RHAT_MAX else ", not converged"
                 ax.plot(*xy.T, color=colour, ls=style, lw=2.2,
                         label=f"MCMC ({pairing} pairs{note}) 2-sigma")
             for m in METHODS:
                 mean, cov, _ = data["fits"][m]
-                xy = ellipse_xy(mean[ix] * unit, cov[np.ix_(ix, ix)] * unit**2)
+                xy = cal.ellipse_xy(mean[ix] * unit, cov[np.ix_(ix, ix)] * unit**2, 2.0)
                 ax.plot(*xy.T, color=colours[m], ls="--", lw=1.6, label=f"{m} 2-sigma")
             ax.plot(0, 0, "+", color="red", ms=12, mew=2, label="estimate")
             ax.set(xlabel=xlabel, ylabel=ylabel, title=f"{name}: {title}")
