@@ -191,7 +191,7 @@ class SgdRun {
         pairing_(source, source_index, reference, scaling, settings),
         sampler_(static_cast<std::uint32_t>(source.size()), settings.seed),
         optimizer_(settings.optimizer),
-        monitor_(settings.convergence),
+        monitor_(settings.convergence, settings.batch_size >= source.size()),
         schedule_(settings.refinement,
                   settings.max_correspondence_distance.to_scaled(scaling.scale()),
                   settings.refinement.min_distance.to_scaled(scaling.scale()),
