@@ -332,10 +332,20 @@ struct PairRun {
   RegistrationResult result;
 };
 
+// A pairs-file entry with its two clouds read.
+struct LoadedPair {
+  RegistrationPair pair;
+  PointCloud source;
+  PointCloud reference;
+};
+
+LoadedPair load_pair(const RegistrationPair& pair) {
+  return {pair, read_point_cloud(pair.source).cloud, read_point_cloud(pair.reference).cloud};
+}
+
 PairRun run_pair(const RegistrationPair& pair, const SgdSettings& s) {
-  const PointCloud source = read_point_cloud(pair.source).cloud;
-  const PointCloud reference = read_point_cloud(pair.reference).cloud;
-  const RegistrationResult r = align(source, reference, s);
+  const LoadedPair loaded = load_pair(pair);
+  const RegistrationResult r = align(loaded.source, loaded.reference, s);
   return {translation_error(r.T_reference_source, pair.T_reference_source_gt),
           rotation_error_geodesic(r.T_reference_source, pair.T_reference_source_gt) / kDeg, r};
 }
@@ -465,9 +475,7 @@ TEST(SmallSource, TakesGaussNewtonStepsWithTheDefaultOptimizer) {
 TEST(SmallSource, GaussNewtonSolvesTheBunnyFasterThanAdam) {
   const auto file = test::shared_data("pairs/pcl_bunny.txt");
   SKIP_WITHOUT(file);
-  const RegistrationPair pair = read_pairs_file(file).front();
-  const PointCloud source = read_point_cloud(pair.source).cloud;
-  const PointCloud reference = read_point_cloud(pair.reference).cloud;
+  const auto [pair, source, reference] = load_pair(read_pairs_file(file).front());
   SgdSettings adam;
   adam.small_source_gauss_newton = false;
   const std::vector<Eigen::Vector3d> axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
@@ -495,9 +503,7 @@ TEST(SmallSource, GaussNewtonSolvesTheBunnyFasterThanAdam) {
 TEST(SmallSource, AWholeSourceBatchConvergesDespiteAPairingCycle) {
   const auto file = test::shared_data("pairs/pcl_bunny.txt");
   SKIP_WITHOUT(file);
-  const RegistrationPair pair = read_pairs_file(file).front();
-  const PointCloud source = read_point_cloud(pair.source).cloud;
-  const PointCloud reference = read_point_cloud(pair.reference).cloud;
+  const auto [pair, source, reference] = load_pair(read_pairs_file(file).front());
   SgdSettings s;
   s.cost = CostType::point_to_plane;
   s.coarse_cost = CostType::point_to_plane;
