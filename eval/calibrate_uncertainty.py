@@ -117,9 +117,14 @@ def draw_problem(scene: np.ndarray, noise_m: float, rng: np.random.Generator):
     return src.astype(np.float32), ref.astype(np.float32), T_gt
 
 
+def wrap(angle_rad: np.ndarray) -> np.ndarray:
+    """Angles in [-pi, pi)."""
+    return (angle_rad + np.pi) % (2 * np.pi) - np.pi
+
+
 def error_of(T_est: np.ndarray, T_gt: np.ndarray) -> np.ndarray:
     e = pose_of(T_est) - pose_of(T_gt)
-    e[3:] = (e[3:] + np.pi) % (2 * np.pi) - np.pi
+    e[3:] = wrap(e[3:])
     return e
 
 

@@ -118,14 +118,10 @@ def rotations(theta: np.ndarray) -> np.ndarray:
     return np.stack([cal.rpy_matrix(*th[3:]) for th in theta])
 
 
-def wrap(angle_rad: np.ndarray) -> np.ndarray:
-    return (angle_rad + np.pi) % (2 * np.pi) - np.pi
-
-
 def offsets_from(theta: np.ndarray, theta_hat: np.ndarray) -> np.ndarray:
     """theta - theta_hat with the angles wrapped: samples as offsets from the estimate."""
     d = np.atleast_2d(theta) - theta_hat
-    d[:, 3:] = wrap(d[:, 3:])
+    d[:, 3:] = cal.wrap(d[:, 3:])
     return d
 
 
@@ -264,7 +260,7 @@ def metropolis(energy: Energy, theta_hat, cov_laplace, chains, steps, rng):
             shape = np.cov(out[:, burn_in // 4:k + 1].reshape(-1, 6), rowvar=False)
             step_chol = np.sqrt(PROPOSAL_SCALE) * np.linalg.cholesky(shape)
     out -= theta_hat
-    out[:, :, 3:] = wrap(out[:, :, 3:])
+    out[:, :, 3:] = cal.wrap(out[:, :, 3:])
     scale = np.exp(log_scale) * (np.linalg.det(step_chol) / np.linalg.det(
         np.sqrt(PROPOSAL_SCALE) * chol)) ** (1 / 6)
     return out, accepted / (steps - burn_in), float(scale)
