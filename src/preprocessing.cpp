@@ -247,11 +247,13 @@ std::size_t hash_of(const VoxelKey& key) {
 // Occupied voxel -> its slot in first-seen order: open addressing with linear probing in one
 // flat array. Written here because std::unordered_map allocates a node per voxel: the 2 cm grid
 // of a 274k-point Kinect frame took 11.7 ms with it, 3-4x what one array of keys takes
-// (docs/performance.md, fifth round).
+// (docs/performance.md, fifth round). Filled up to 3/4 before it doubles: the table's size in
+// cache, not its probe count, sets the time (half the table of a 1/2 limit: 1.1-1.2x faster
+// end to end on 7-Scenes, KITTI and the ETH map, even elsewhere; performance.md, 11th round).
 class VoxelSlots {
  public:
   explicit VoxelSlots(std::size_t expected) {
-    rehash(std::bit_ceil(std::max<std::size_t>(64, 2 * expected)));
+    rehash(std::bit_ceil(std::max<std::size_t>(64, expected + expected / 4)));
   }
 
   [[nodiscard]] std::size_t size() const { return size_; }
@@ -283,7 +285,7 @@ class VoxelSlots {
   };
 
   std::size_t find_or_add(const VoxelKey& key) {
-    if (2 * (size_ + 1) > entries_.size()) rehash(2 * entries_.size());
+    if (4 * (size_ + 1) > 3 * entries_.size()) rehash(2 * entries_.size());  // 3/4 full
     const std::size_t mask = entries_.size() - 1;
     for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
       Entry& e = entries_[i];
