@@ -191,7 +191,9 @@ class SgdRun {
         pairing_(source, source_index, reference, scaling, settings),
         sampler_(static_cast<std::uint32_t>(source.size()), settings.seed),
         optimizer_(settings.optimizer),
-        monitor_(settings.convergence, settings.batch_size >= source.size()),
+        // Batches are the same set every time only when m is a multiple of N: beyond N a batch
+        // also draws part of the next epoch at random (EpochSampler).
+        monitor_(settings.convergence, settings.batch_size % source.size() == 0),
         schedule_(settings.refinement,
                   settings.max_correspondence_distance.to_scaled(scaling.scale()),
                   settings.refinement.min_distance.to_scaled(scaling.scale()),

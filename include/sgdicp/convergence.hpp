@@ -10,9 +10,9 @@
 // cost, where the gradient is small but so is its noise (a per-coordinate test does not).
 // Exact data, where gradients and steps vanish (and T^2 compares noise with rounding), is caught
 // by absolute tolerances: every step of the window and the window's mean gradient below them.
-// Deterministic batches (m >= N: every mini-batch is the whole source) need one more rule:
-// their iterates can settle into a cycle between pairings (measured on the 361-point bunny with
-// full-batch Gauss-Newton: steps of 2e-4 back and forth, mean gradient 3e-9, 4,000 iterations
+// Deterministic batches (m a multiple of N: every mini-batch is the whole source) need one more
+// rule: their iterates can settle into a cycle between pairings (measured on the 361-point bunny
+// with full-batch Gauss-Newton: steps of 2e-4 back and forth, mean gradient 3e-9, 4,000 iterations
 // without a stop), where S has rank one and T^2 is huge. There, a window whose mean gradient is
 // below the tolerances and whose path is jitter, not travel, is stationary too. Not with
 // stochastic batches: their window mean can dip below the tolerances while the pose is still
@@ -65,7 +65,7 @@ enum class WindowTest {
 
 class ConvergenceMonitor {
  public:
-  /// `deterministic_batches`: every mini-batch holds the whole source (m >= N).
+  /// `deterministic_batches`: every mini-batch is the whole source, as a set (m a multiple of N).
   explicit ConvergenceMonitor(const ConvergenceSettings& settings,
                               bool deterministic_batches = false)
       : settings_(settings), deterministic_batches_(deterministic_batches) {}
