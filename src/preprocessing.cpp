@@ -18,6 +18,7 @@
 
 #include "checks.hpp"
 #include "point_surfaces.hpp"
+#include "recycling_allocator.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/scaling.hpp"
 #include "sgdicp/threads.hpp"
@@ -298,7 +299,7 @@ class VoxelSlots {
   }
 
   void rehash(std::size_t capacity) {
-    std::vector<Entry> old(capacity);
+    detail::RecycledVector<Entry> old(capacity);
     old.swap(entries_);
     const std::size_t mask = capacity - 1;
     for (const Entry& e : old) {
@@ -309,7 +310,7 @@ class VoxelSlots {
     }
   }
 
-  std::vector<Entry> entries_;
+  detail::RecycledVector<Entry> entries_;
   std::size_t size_ = 0;
   VoxelKey last_key_;
   std::size_t last_slot_ = 0;
@@ -412,9 +413,9 @@ struct Moments : Centroid {
 template <class Voxel>
 struct VoxelTable {
   VoxelSlots slots;
-  std::vector<VoxelKey> keys;  // by slot
-  std::vector<Voxel> voxels;   // by slot
-  std::vector<std::uint32_t> point_slots;
+  detail::RecycledVector<VoxelKey> keys;  // by slot
+  detail::RecycledVector<Voxel> voxels;   // by slot
+  detail::RecycledVector<std::uint32_t> point_slots;
   bool over_limit = false;  // a counting pass stopped above its limit: keys and voxels partial
 };
 
@@ -474,7 +475,7 @@ VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, Point
 template <class Voxel>
 void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t limit) {
   t.over_limit = t.over_limit || later.over_limit;
-  std::vector<std::uint32_t> renumbered(later.voxels.size());
+  detail::RecycledVector<std::uint32_t> renumbered(later.voxels.size());
   for (std::size_t s = 0; s < later.voxels.size() && !t.over_limit; ++s) {
     const std::size_t slot = t.slots.slot(later.keys[s]);
     if (slot == t.voxels.size()) {
@@ -524,9 +525,9 @@ template <class Voxel>
 VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted>&& counted,
                                      std::size_t threads) {
   const std::vector<PointRange> parts = point_parts(cloud.size());
-  std::vector<std::vector<Voxel>> sums(parts.size());
+  std::vector<detail::RecycledVector<Voxel>> sums(parts.size());
   for_parts(parts.size(), threads, [&](std::size_t part) {
-    std::vector<Voxel>& voxels = sums[part];
+    detail::RecycledVector<Voxel>& voxels = sums[part];
     voxels.resize(counted.keys.size());
     for (std::size_t i = parts[part].begin; i < parts[part].end; ++i) {
       voxels[counted.point_slots[i]].add(cloud.points[i]);
@@ -540,7 +541,8 @@ VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted
 
 // The centroids of a table's voxels, as a cloud measured from origin_m.
 template <class Voxel>
-PointCloud centroids_of(const std::vector<Voxel>& voxels, const Eigen::Vector3d& origin_m) {
+PointCloud centroids_of(const detail::RecycledVector<Voxel>& voxels,
+                        const Eigen::Vector3d& origin_m) {
   PointCloud out;
   out.origin_m = origin_m;
   out.points.reserve(voxels.size());
@@ -554,7 +556,7 @@ PointCloud centroids_of(const std::vector<Voxel>& voxels, const Eigen::Vector3d&
 PointSurface block_surface(const VoxelTable<Moments>& table, std::size_t v,
                            const NeighborhoodSettings& stored) {
   const VoxelSlots& slots = table.slots;
-  const std::vector<Moments>& voxels = table.voxels;
+  const detail::RecycledVector<Moments>& voxels = table.voxels;
   const VoxelKey& centre = table.keys[v];
   double count = 0.0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
