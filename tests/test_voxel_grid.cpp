@@ -189,6 +189,54 @@ TEST(VoxelSurfaces, CentroidsOfVoxelDownsampleWithThePlanesNormal) {
   EXPECT_NEAR(std::sqrt(along), 0.001, 0.0003);
 }
 
+// Each voxel's covariance is that of every point in its 3x3x3 block, counted by brute force over
+// the points: on a cloud with gaps in every direction (so that the sweep over the sorted voxels
+// meets columns with missing voxels, empty columns and negative indices) no block misses a
+// neighbour or counts one twice.
+TEST(VoxelSurfaces, EveryBlockHoldsExactlyItsPointsNeighbourhood) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.2, 1.2);
+  std::bernoulli_distribution keep(0.35);
+  PointCloud cloud;
+  const double voxel = 0.1;
+  while (cloud.size() < 12000) {
+    const Eigen::Vector3d p(u(rng), u(rng), 0.1 * u(rng));
+    // Thin whole voxels out so that blocks have holes (4 points per kept voxel on average).
+    const Eigen::Vector3d cell = (p / voxel).array().floor();
+    const auto h = static_cast<std::uint64_t>((cell.x() + 50) * 10007 + (cell.y() + 50) * 101 +
+                                              (cell.z() + 50));
+    if (std::mt19937_64(h)() % 3 == 0 || keep(rng)) cloud.points.push_back(p.cast<float>());
+  }
+  NeighborhoodSettings settings;
+  settings.regularize = false;  // each voxel's covariance is then its block's, as computed
+  settings.num_threads = 1;
+  const PointCloud grid = voxel_downsample_with_surfaces(cloud, voxel, settings);
+  ASSERT_GT(grid.size(), 1100U);  // two threads get a chunk each
+  const auto cell_of = [&](const Eigen::Vector3f& p) {
+    return Eigen::Vector3i((p.cast<double>() / voxel).array().floor().cast<int>());
+  };
+  std::vector<Eigen::Vector3i> point_cells;
+  for (const auto& p : cloud.points) point_cells.push_back(cell_of(p));
+  for (std::size_t v = 0; v < grid.size(); v += 7) {
+    const Eigen::Vector3i centre = cell_of(grid.points[v]);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+    double count = 0.0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if ((point_cells[i] - centre).cwiseAbs().maxCoeff() > 1) continue;
+      const Eigen::Vector3d p = cloud.points[i].cast<double>();
+      sum += p;
+      outer += p * p.transpose();
+      count += 1.0;
+    }
+    const Eigen::Vector3d mean = sum / count;
+    const Eigen::Matrix3d covariance = outer / count - mean * mean.transpose();
+    EXPECT_LT((grid.covariances[v].cast<double>() - covariance).norm(), 1e-6) << v;
+  }
+  settings.num_threads = 2;  // chunks of the sweep start in the middle of the sorted voxels
+  EXPECT_EQ(voxel_downsample_with_surfaces(cloud, voxel, settings).covariances, grid.covariances);
+}
+
 TEST(VoxelSurfaces, LinesAndLonePointsHaveNoSurface) {
   PointCloud cloud;
   for (int i = 0; i < 1000; ++i) cloud.points.emplace_back(0.001F * static_cast<float>(i), 0, 0);
