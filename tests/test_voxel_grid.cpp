@@ -189,35 +189,38 @@ TEST(VoxelSurfaces, CentroidsOfVoxelDownsampleWithThePlanesNormal) {
   EXPECT_NEAR(std::sqrt(along), 0.001, 0.0003);
 }
 
-// Each voxel's covariance is that of every point in its 3x3x3 block, counted by brute force over
-// the points: on a cloud with gaps in every direction (so that the sweep over the sorted voxels
-// meets columns with missing voxels, empty columns and negative indices) no block misses a
-// neighbour or counts one twice.
-TEST(VoxelSurfaces, EveryBlockHoldsExactlyItsPointsNeighbourhood) {
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-1.2, 1.2);
+// A layer of points 24 x 24 x 2 voxels around `centre` in which whole voxels are missing (4
+// points per kept voxel on average), so that blocks have holes in every direction.
+PointCloud holey_layer(const Eigen::Vector3d& centre, double voxel, std::size_t count,
+                       std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-12.0 * voxel, 12.0 * voxel);
   std::bernoulli_distribution keep(0.35);
   PointCloud cloud;
-  const double voxel = 0.1;
-  while (cloud.size() < 12000) {
-    const Eigen::Vector3d p(u(rng), u(rng), 0.1 * u(rng));
-    // Thin whole voxels out so that blocks have holes (4 points per kept voxel on average).
-    const Eigen::Vector3d cell = (p / voxel).array().floor();
+  while (cloud.size() < count) {
+    const Eigen::Vector3d p = centre + Eigen::Vector3d(u(rng), u(rng), 0.1 * u(rng));
+    const Eigen::Vector3d cell = ((p - centre) / voxel).array().floor();
     const auto h = static_cast<std::uint64_t>((cell.x() + 50) * 10007 + (cell.y() + 50) * 101 +
                                               (cell.z() + 50));
     if (std::mt19937_64(h)() % 3 == 0 || keep(rng)) cloud.points.push_back(p.cast<float>());
   }
+  return cloud;
+}
+
+// Each voxel's covariance (raw, not regularised) against the covariance of every point in its
+// 3x3x3 block, counted by brute force over the points; every `stride`-th voxel.
+void expect_block_covariances(const PointCloud& cloud, double voxel, std::size_t stride) {
   NeighborhoodSettings settings;
-  settings.regularize = false;  // each voxel's covariance is then its block's, as computed
+  settings.regularize = false;
   settings.num_threads = 1;
   const PointCloud grid = voxel_downsample_with_surfaces(cloud, voxel, settings);
-  ASSERT_GT(grid.size(), 1100U);  // two threads get a chunk each
+  ASSERT_GT(grid.size(), 1100U);  // two threads get a chunk each, below
   const auto cell_of = [&](const Eigen::Vector3f& p) {
     return Eigen::Vector3i((p.cast<double>() / voxel).array().floor().cast<int>());
   };
   std::vector<Eigen::Vector3i> point_cells;
   for (const auto& p : cloud.points) point_cells.push_back(cell_of(p));
-  for (std::size_t v = 0; v < grid.size(); v += 7) {
+  for (std::size_t v = 0; v < grid.size(); v += stride) {
     const Eigen::Vector3i centre = cell_of(grid.points[v]);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
@@ -231,10 +234,25 @@ TEST(VoxelSurfaces, EveryBlockHoldsExactlyItsPointsNeighbourhood) {
     }
     const Eigen::Vector3d mean = sum / count;
     const Eigen::Matrix3d covariance = outer / count - mean * mean.transpose();
-    EXPECT_LT((grid.covariances[v].cast<double>() - covariance).norm(), 1e-6) << v;
+    // Both sums are of raw products (x^2 ~ 4e8 at 20 km): allow their rounding.
+    const double rounding = 1e-6 + 4e-15 * mean.squaredNorm();
+    EXPECT_LT((grid.covariances[v].cast<double>() - covariance).norm(), rounding) << v;
   }
   settings.num_threads = 2;  // chunks of the sweep start in the middle of the sorted voxels
   EXPECT_EQ(voxel_downsample_with_surfaces(cloud, voxel, settings).covariances, grid.covariances);
+}
+
+// No block misses a neighbour or counts one twice: on layers with holes (so that the sweep over
+// the sorted voxels meets columns with missing voxels, empty columns and negative indices), on
+// the radix-sorted path and, with a second layer 20 km away (index spans of 22 bits per axis,
+// too wide for one word with the slot), on the compared path.
+TEST(VoxelSurfaces, EveryBlockHoldsExactlyItsPointsNeighbourhood) {
+  expect_block_covariances(holey_layer(Eigen::Vector3d::Zero(), 0.1, 12000, 5), 0.1, 7);
+  const double voxel = 0.005;
+  PointCloud apart = holey_layer(Eigen::Vector3d::Zero(), voxel, 6000, 6);
+  const PointCloud far = holey_layer(Eigen::Vector3d(2e4, -2e4, 2e4), voxel, 6000, 7);
+  apart.points.insert(apart.points.end(), far.points.begin(), far.points.end());
+  expect_block_covariances(apart, voxel, 5);
 }
 
 TEST(VoxelSurfaces, LinesAndLonePointsHaveNoSurface) {
