@@ -8,7 +8,8 @@
 #         TSan build of everything would double the stage for tests that start no thread):
 #         8 threads on one ReferenceIndex (test_stress Load.*), concurrent KD-tree queries,
 #         concurrent registrations on a shared index, normals and covariances on 1-4 threads
-#         (the only std::jthread pool of the library), and `sgdicp bench --jobs 2`.
+#         (the only std::jthread pool of the library), the voxel passes' block cache and block
+#         sweep on two threads, and `sgdicp bench --jobs 2`.
 # Both use RelWithDebInfo at -O1 (sanitized -O0 ran the suite several times slower; -O1 keeps
 # the stacks readable). The load and soak tests run a fifth and a tenth of their work when
 # sanitized (tests/test_stress.cpp). Builds use ${SANITIZE_JOBS:-2} jobs.
@@ -60,7 +61,7 @@ run_asan_ci() {
 }
 
 TSAN_TARGETS=(test_stress test_core test_registration test_solver_parts test_preprocessing sgdicp_cli)
-TSAN_TESTS='^(Load\.|HelperThread\.|Threads\.TwoThreads|NearestNeighborTest\.Concurrent|ReferenceReuse\.|Covariances\.IdenticalForAnyThreadCount|VoxelDownsample\.HalvesMerge)'
+TSAN_TESTS='^(Load\.|HelperThread\.|RecyclingAllocator\.|VoxelSurfaces\.EveryBlock|Threads\.TwoThreads|NearestNeighborTest\.Concurrent|ReferenceReuse\.|Covariances\.IdenticalForAnyThreadCount|VoxelDownsample\.HalvesMerge)'
 
 tsan_bench() {  # the demo pair, twice per method, on two threads
   local pairs=build-tsan/demo_pairs.txt
