@@ -638,25 +638,24 @@ template <class Visit>
 void sweep_blocks(const detail::RecycledVector<KeyedSlot>& sorted,
                   const detail::RecycledVector<Moments>& moments, std::size_t begin,
                   std::size_t end, const Visit& visit) {
-  std::array<std::size_t, 9> cursor{};
-  const auto first_at_least = [&](const VoxelKey& key) {
-    return static_cast<std::size_t>(
-        std::partition_point(sorted.begin(), sorted.end(),
-                             [&](const KeyedSlot& e) { return e.key < key; }) -
-        sorted.begin());
+  // The lowest voxel of column c (dx = c / 3 - 1, dy = c % 3 - 1) of centre's block.
+  const auto lowest_of = [](const VoxelKey& centre, std::size_t c) {
+    return VoxelKey{centre.x + static_cast<std::int64_t>(c / 3) - 1,
+                    centre.y + static_cast<std::int64_t>(c % 3) - 1, centre.z - 1};
   };
+  std::array<std::size_t, 9> cursor{};
   for (std::size_t c = 0; c < 9 && begin < end; ++c) {
-    const VoxelKey& k = sorted[begin].key;
-    cursor[c] = first_at_least({k.x + static_cast<std::int64_t>(c / 3) - 1,
-                                k.y + static_cast<std::int64_t>(c % 3) - 1, k.z - 1});
+    const VoxelKey lowest = lowest_of(sorted[begin].key, c);
+    cursor[c] = static_cast<std::size_t>(
+        std::partition_point(sorted.begin(), sorted.end(),
+                             [&](const KeyedSlot& e) { return e.key < lowest; }) -
+        sorted.begin());
   }
   const std::size_t n = sorted.size();
   for (std::size_t i = begin; i < end; ++i) {
-    const VoxelKey& centre = sorted[i].key;
     Moments block;
     for (std::size_t c = 0; c < 9; ++c) {
-      const VoxelKey lowest{centre.x + static_cast<std::int64_t>(c / 3) - 1,
-                            centre.y + static_cast<std::int64_t>(c % 3) - 1, centre.z - 1};
+      const VoxelKey lowest = lowest_of(sorted[i].key, c);
       std::size_t& j = cursor[c];
       while (j < n && sorted[j].key < lowest) ++j;
       for (std::size_t k = j; k < n && k < j + 3; ++k) {
@@ -718,10 +717,10 @@ detail::RecycledVector<KeyedSlot> sorted_by_key(const detail::RecycledVector<Vox
     const VoxelKey& k = keys[v];
     const std::uint64_t packed =
         (span(low.x, k.x) << (by + bz)) | (span(low.y, k.y) << bz) | span(low.z, k.z);
-    words[v] = bs == 0 ? packed : (packed << bs) | v;
+    words[v] = (packed << bs) | v;  // bs < 64 here: it is 0 only for n = 1, then v = 0
   }
   radix_sort(words, bx + by + bz + bs);
-  const std::uint64_t slot_mask = bs == 0 ? 0 : (std::uint64_t{1} << bs) - 1;
+  const std::uint64_t slot_mask = (std::uint64_t{1} << bs) - 1;
   for (std::size_t i = 0; i < n; ++i) {
     const auto slot = static_cast<std::uint32_t>(words[i] & slot_mask);
     out[i] = {keys[slot], slot};
@@ -743,7 +742,7 @@ PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Ve
   parallel_chunks(n, resolve_threads(threads, n), [&](std::size_t begin, std::size_t end) {
     sweep_blocks(sorted, voxels, begin, end, [&](std::uint32_t v, const Moments& block) {
       out.points[v] = voxels[v].centroid();
-      const PointSurface s = block_surface_of(block, voxels[v].centroid(), stored);
+      const PointSurface s = block_surface_of(block, out.points[v], stored);
       out.normals[v] = s.normal;
       out.covariances[v] = s.covariance;
     });
