@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cfloat>
 #include <cmath>
@@ -728,25 +729,79 @@ detail::RecycledVector<KeyedSlot> sorted_by_key(const detail::RecycledVector<Vox
   return out;
 }
 
+// Voxels per claim of the block sweep's threads: small enough that a thread that starts late
+// (after its side task) still takes its share, large enough that the 9 binary searches that
+// start a chunk's cursors stay negligible.
+constexpr std::size_t kSweepChunk = 1024;
+
+// The block surface of every voxel of an accumulated table into `normals` and `covariances` (by
+// slot); `stored` from in_stored_frame. `side` runs on a second thread while the first sorts the
+// keys, and that thread then joins the sweep: the sweep is claimed in chunks by whichever
+// thread is free. Each voxel's surface is a pure function of its block (sweep_blocks), so the
+// values are the same for any thread count and split.
+template <class Side>
+void sweep_surfaces(const VoxelTable<Moments>& table, const NeighborhoodSettings& stored,
+                    std::size_t threads, std::vector<Eigen::Vector3f>& normals,
+                    std::vector<Eigen::Matrix3f>& covariances, const Side& side) {
+  const auto& voxels = table.voxels;
+  const std::size_t n = voxels.size();
+  normals.resize(n);
+  covariances.resize(n);
+  detail::RecycledVector<KeyedSlot> sorted;
+  // The sort's state for the threads that wait for it: pending, done, or failed (its exception
+  // reaches the caller through parallel_chunks; nobody sweeps then).
+  enum class SortState : int { pending, done, failed };
+  std::atomic<SortState> sort_state{SortState::pending};
+  std::atomic<std::size_t> next_chunk{0};
+  const auto sweep = [&] {
+    if (sort_state.load(std::memory_order_acquire) != SortState::done) return;
+    for (;;) {
+      const std::size_t begin = next_chunk.fetch_add(kSweepChunk, std::memory_order_relaxed);
+      if (begin >= n) return;
+      sweep_blocks(sorted, voxels, begin, std::min(n, begin + kSweepChunk),
+                   [&](std::uint32_t v, const Moments& block) {
+                     const PointSurface s = block_surface_of(block, voxels[v].centroid(), stored);
+                     normals[v] = s.normal;
+                     covariances[v] = s.covariance;
+                   });
+    }
+  };
+  const auto sort_keys = [&] {
+    SortState state = SortState::failed;
+    try {
+      sorted = sorted_by_key(table.keys);
+      state = SortState::done;
+    } catch (...) {
+      sort_state.store(state, std::memory_order_release);
+      sort_state.notify_all();
+      throw;
+    }
+    sort_state.store(state, std::memory_order_release);
+    sort_state.notify_all();
+  };
+  const std::size_t used = resolve_threads(threads, n);
+  if (used == 1) {
+    side();
+    sort_keys();
+    sweep();
+    return;
+  }
+  parallel_chunks(used, used, [&](std::size_t t, std::size_t) {
+    if (t == 0) {
+      sort_keys();
+    } else {
+      if (t == 1) side();
+      sort_state.wait(SortState::pending, std::memory_order_acquire);
+    }
+    sweep();
+  });
+}
+
 // voxel_downsample_with_surfaces of an accumulated table; `stored` from in_stored_frame.
 PointCloud with_block_surfaces(const VoxelTable<Moments>& table, const Eigen::Vector3d& origin_m,
                                const NeighborhoodSettings& stored, std::size_t threads) {
-  const auto& voxels = table.voxels;
-  const std::size_t n = voxels.size();
-  PointCloud out;
-  out.origin_m = origin_m;
-  out.points.resize(n);
-  out.normals.resize(n);
-  out.covariances.resize(n);
-  const detail::RecycledVector<KeyedSlot> sorted = sorted_by_key(table.keys);
-  parallel_chunks(n, resolve_threads(threads, n), [&](std::size_t begin, std::size_t end) {
-    sweep_blocks(sorted, voxels, begin, end, [&](std::uint32_t v, const Moments& block) {
-      out.points[v] = voxels[v].centroid();
-      const PointSurface s = block_surface_of(block, out.points[v], stored);
-      out.normals[v] = s.normal;
-      out.covariances[v] = s.covariance;
-    });
-  });
+  PointCloud out = centroids_of(table.voxels, origin_m);
+  sweep_surfaces(table, stored, threads, out.normals, out.covariances, [] {});
   return out;
 }
 
@@ -791,26 +846,40 @@ PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
   return describe(points[i], points, neighbors, stored);
 }
 
-RegistrationGrid registration_grid(const PointCloud& cloud, double voxel_size_m,
-                                   std::size_t downsample_to, const NeighborhoodSettings& settings,
-                                   bool surfaces) {
+ReferenceIndex registration_index(PointCloud cloud, double voxel_size_m, std::size_t downsample_to,
+                                  const NeighborhoodSettings& settings, bool surfaces,
+                                  const KdTreeSettings& tree) {
   std::optional<VoxelTable<Counted>> settled;
   voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, settings.num_threads, &settled);
-  if (voxel_size_m == 0.0) return {};
+  if (voxel_size_m == 0.0) return ReferenceIndex(std::move(cloud), tree);
   if (!surfaces) {
     const auto table = accumulate<Centroid>(cloud, voxel_size_m, settings.num_threads, settled);
-    return {centroids_of(table.voxels, cloud.origin_m), voxel_size_m};
+    return ReferenceIndex::on_voxel_grid(centroids_of(table.voxels, cloud.origin_m), voxel_size_m,
+                                         tree);
   }
   check_neighborhood(settings);
   const auto table = accumulate<Moments>(cloud, voxel_size_m, settings.num_threads, settled);
+  PointCloud centroids = centroids_of(table.voxels, cloud.origin_m);
   // A 3x3 patch of voxels across a surface holds about 9 * (points per voxel): at least k of
   // them, or the centroids' own k nearest neighbours give the better estimate.
   if (9 * cloud.size() < settings.k * table.voxels.size()) {
-    return {centroids_of(table.voxels, cloud.origin_m), voxel_size_m};
+    return ReferenceIndex::on_voxel_grid(std::move(centroids), voxel_size_m, tree);
   }
-  return {with_block_surfaces(table, cloud.origin_m, in_stored_frame(settings, cloud),
-                              settings.num_threads),
-          voxel_size_m};
+  // The tree over the centroids is built on one thread while the other sorts the keys and
+  // starts the sweep: neither waits for the other (docs/performance.md, thirteenth round).
+  std::optional<ReferenceIndex> index;
+  KdTreeSettings tree_alongside = tree;
+  tree_alongside.num_threads = 1;
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<Eigen::Matrix3f> covariances;
+  const auto build_tree = [&] {
+    index.emplace(
+        ReferenceIndex::on_voxel_grid(std::move(centroids), voxel_size_m, tree_alongside));
+  };
+  sweep_surfaces(table, in_stored_frame(settings, cloud), settings.num_threads, normals,
+                 covariances, build_tree);
+  index->set_normals_and_covariances(std::move(normals), std::move(covariances));
+  return std::move(*index);
 }
 
 }  // namespace detail

@@ -190,7 +190,7 @@ inline void conclude(RegistrationResult& result, const PointCloud& source,
   result.time_ms = clock.elapsed_ms();
 }
 
-/// The index over a registration's reference (registration_grid): as given, or on its grid
+/// The index over a registration's reference (registration_index): as given, or on its grid
 /// with the surfaces of its voxel blocks when the cost reads them.
 template <typename Settings>
 [[nodiscard]] ReferenceIndex grid_index(PointCloud reference, const Settings& settings) {
@@ -198,10 +198,8 @@ template <typename Settings>
   NeighborhoodSettings neighborhood = settings.neighborhood;
   neighborhood.num_threads = settings.num_threads;
   const bool surfaces = needs_reference_normals(settings.cost) || needs_covariances(settings.cost);
-  RegistrationGrid grid = registration_grid(reference, settings.voxel_size_m,
-                                            settings.downsample_to, neighborhood, surfaces);
-  if (!grid.thinned) return ReferenceIndex(std::move(reference), tree);
-  return ReferenceIndex::on_voxel_grid(std::move(*grid.thinned), grid.voxel_size_m, tree);
+  return registration_index(std::move(reference), settings.voxel_size_m, settings.downsample_to,
+                            neighborhood, surfaces, tree);
 }
 
 /// The index of a reference given as a cloud (reference_index_for, the convenience overloads of

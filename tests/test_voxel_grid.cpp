@@ -238,8 +238,10 @@ void expect_block_covariances(const PointCloud& cloud, double voxel, std::size_t
     const double rounding = 1e-6 + 4e-15 * mean.squaredNorm();
     EXPECT_LT((grid.covariances[v].cast<double>() - covariance).norm(), rounding) << v;
   }
-  settings.num_threads = 2;  // chunks of the sweep start in the middle of the sorted voxels
-  EXPECT_EQ(voxel_downsample_with_surfaces(cloud, voxel, settings).covariances, grid.covariances);
+  for (const std::size_t threads : {2, 3}) {  // chunks start in the middle of the sorted voxels
+    settings.num_threads = threads;
+    EXPECT_EQ(voxel_downsample_with_surfaces(cloud, voxel, settings).covariances, grid.covariances);
+  }
 }
 
 // No block misses a neighbour or counts one twice: on layers with holes (so that the sweep over
@@ -405,6 +407,35 @@ TEST(RegistrationVoxelGrid, ThreadsGiveTheSameResult) {
     EXPECT_EQ(a.iterations, b.iterations);
     EXPECT_EQ(a.constraint_ratio, b.constraint_ratio);
     EXPECT_EQ(a.inlier_rmse_m, b.inlier_rmse_m);
+  }
+}
+
+// With threads the KD-tree over the grid is built while the block surfaces are swept (chunks
+// claimed by whichever thread is free, a third thread waiting for the keys' sort): the same
+// grid, surfaces and nearest neighbours as on one thread.
+TEST(RegistrationVoxelGrid, TreeAlongsideTheSurfacesGivesTheOneThreadIndex) {
+  const PointCloud reference = synthetic_scene(43, 40000);
+  SgdSettings one;
+  one.downsample_to = 6000;
+  one.num_threads = 1;
+  const ReferenceIndex single = reference_index_for(reference, one);
+  ASSERT_TRUE(single.cloud().has_normals());
+  ASSERT_GT(single.size(), 3000U);  // several chunks of the sweep
+  for (const std::size_t threads : {2, 3}) {
+    SCOPED_TRACE(threads);
+    SgdSettings many = one;
+    many.num_threads = threads;
+    const ReferenceIndex index = reference_index_for(reference, many);
+    EXPECT_EQ(index.voxel_size_m(), single.voxel_size_m());
+    EXPECT_EQ(index.cloud().points, single.cloud().points);
+    EXPECT_EQ(index.cloud().normals, single.cloud().normals);
+    EXPECT_EQ(index.cloud().covariances, single.cloud().covariances);
+    for (std::size_t i = 0; i < reference.size(); i += 97) {
+      const auto a = single.nearest(reference.points[i], 1.0F);
+      const auto b = index.nearest(reference.points[i], 1.0F);
+      ASSERT_TRUE(a && b);
+      EXPECT_EQ(a->index, b->index);
+    }
   }
 }
 
