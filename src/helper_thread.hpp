@@ -1,14 +1,18 @@
 #pragma once
 // A persistent second thread for short, frequent jobs: a mini-batch's nearest-neighbour queries
-// take 20-150 us and a run makes hundreds of them, too short to start a thread for each
-// (parallel_chunks' std::jthread costs 30-60 us). The caller hands one half of a job to the
+// take 20-150 us and a run makes hundreds of them, too short to start a thread for each (a
+// std::jthread's start and join cost 30-100 us here). The caller hands one half of a job to the
 // helper, runs the other half and waits. Which half runs where changes no value, so the results
-// are the same as on one thread (docs/design.md, "Threads").
+// are the same as on one thread (docs/design.md, "Threads"). run_ranges gives the voxel passes
+// the calling thread's own helpers the same way.
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <memory>
+#include <span>
 #include <thread>
+#include <vector>
 
 namespace sgdicp::detail {
 
@@ -26,20 +30,31 @@ class HelperThread {
   // when both halves are done; rethrows the first exception of either.
   template <class Part>
   void split(std::size_t n, const Part& part) {
-    job_ = [](const void* context, std::size_t begin, std::size_t end) {
-      (*static_cast<const Part*>(context))(begin, end);
-    };
-    context_ = &part;
-    begin_ = n / 2;
-    end_ = n;
-    error_ = nullptr;
-    publish();
+    start(part, n / 2, n);
     try {
       part(0, n / 2);
     } catch (...) {
       wait_done();  // the helper's half reads the caller's data: let it finish first
       throw;
     }
+    finish();
+  }
+
+  // part(begin, end) on the helper; `part` must outlive the matching finish().
+  template <class Part>
+  void start(const Part& part, std::size_t begin, std::size_t end) {
+    job_ = [](const void* context, std::size_t b, std::size_t e) {
+      (*static_cast<const Part*>(context))(b, e);
+    };
+    context_ = &part;
+    begin_ = begin;
+    end_ = end;
+    error_ = nullptr;
+    publish();
+  }
+
+  // Waits for the job of start(); rethrows its exception.
+  void finish() {
     wait_done();
     if (error_) std::rethrow_exception(error_);
   }
@@ -105,5 +120,70 @@ class HelperThread {
   std::atomic<std::uint32_t> done_{0};
   std::jthread thread_;  // last: starts after the members above exist, joins before they go
 };
+
+/// body(bounds[t], bounds[t + 1]) for every t < bounds.size() - 1: the first range on the
+/// calling thread, the others on its own helpers, started on its first parallel pass and kept
+/// until it ends (they sleep after ~50 us without work). Returns when all ranges are done;
+/// rethrows the first exception in range order. A call made from within a range runs on
+/// threads of its own (std::jthread), as does any call made while the helpers serve another.
+struct ThreadHelpers {
+  std::vector<std::unique_ptr<HelperThread>> helpers;
+  bool serving = false;  // a run_ranges of this thread is under way
+};
+
+/// The calling thread's helpers (one set per thread, not per caller).
+inline ThreadHelpers& thread_helpers() {
+  thread_local ThreadHelpers team;
+  return team;
+}
+
+template <class Body>
+void run_ranges(std::span<const std::size_t> bounds, const Body& body) {
+  const std::size_t parts = bounds.size() - 1;
+  if (parts == 1) {
+    body(bounds[0], bounds[1]);
+    return;
+  }
+  ThreadHelpers& team = thread_helpers();
+  auto& helpers = team.helpers;
+  std::vector<std::exception_ptr> errors(parts);
+  if (team.serving) {
+    const auto run = [&](std::size_t t) {
+      try {
+        body(bounds[t], bounds[t + 1]);
+      } catch (...) {
+        errors[t] = std::current_exception();
+      }
+    };
+    {
+      std::vector<std::jthread> workers;
+      for (std::size_t t = 1; t < parts; ++t) workers.emplace_back(run, t);
+      run(0);
+    }  // jthreads join here
+    for (const auto& error : errors) {
+      if (error) std::rethrow_exception(error);
+    }
+    return;
+  }
+  while (helpers.size() + 1 < parts) helpers.push_back(std::make_unique<HelperThread>());
+  team.serving = true;
+  for (std::size_t t = 1; t < parts; ++t) helpers[t - 1]->start(body, bounds[t], bounds[t + 1]);
+  try {
+    body(bounds[0], bounds[1]);
+  } catch (...) {
+    errors[0] = std::current_exception();
+  }
+  for (std::size_t t = 1; t < parts; ++t) {
+    try {
+      helpers[t - 1]->finish();
+    } catch (...) {
+      errors[t] = std::current_exception();
+    }
+  }
+  team.serving = false;
+  for (const auto& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+}
 
 }  // namespace sgdicp::detail

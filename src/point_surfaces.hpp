@@ -34,6 +34,11 @@ struct PointSurface {
                                             const NeighborhoodSettings& stored,
                                             std::vector<Neighbor>& neighbors);
 
+/// The calling thread's share of the points that its next voxel counting pass gives the first of
+/// its two parts (preprocessing.cpp, counting_parts), set by each pass from its parts' times.
+/// Any share gives the same table; tests set it to check that.
+[[nodiscard]] double& counting_share();
+
 /// The index over the reference of a registration: on the grid of
 /// registration_voxel_size(cloud, voxel_size_m, downsample_to) (the search's last counting pass
 /// doubles as the thinning's), or over the cloud as given when that is 0. On a grid: the

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <bit>
 #include <cfloat>
+#include <chrono>
 #include <cmath>
 #include <compare>
 #include <exception>
@@ -14,12 +15,14 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
 
 #include "checks.hpp"
+#include "helper_thread.hpp"
 #include "point_surfaces.hpp"
 #include "recycling_allocator.hpp"
 #include "sgdicp/error.hpp"
@@ -106,26 +109,13 @@ std::size_t resolve_threads(std::size_t requested, std::size_t num_points) {
 }
 
 // Runs body(begin, end) over contiguous chunks of [0, n) on `threads` threads (the calling
-// thread takes the first chunk) and rethrows the first exception after all have joined.
+// thread takes the first chunk, its helpers the others: helper_thread.hpp) and rethrows the
+// first exception after all have ended.
 template <class Body>
 void parallel_chunks(std::size_t n, std::size_t threads, const Body& body) {
-  std::vector<std::exception_ptr> errors(threads);
-  auto run = [&](std::size_t t) {
-    try {
-      body(n * t / threads, n * (t + 1) / threads);
-    } catch (...) {
-      errors[t] = std::current_exception();
-    }
-  };
-  {
-    std::vector<std::jthread> workers;
-    workers.reserve(threads - 1);
-    for (std::size_t t = 1; t < threads; ++t) workers.emplace_back(run, t);
-    run(0);
-  }  // jthreads join here
-  for (const auto& error : errors) {
-    if (error) std::rethrow_exception(error);
-  }
+  std::vector<std::size_t> bounds(threads + 1);
+  for (std::size_t t = 0; t <= threads; ++t) bounds[t] = n * t / threads;
+  detail::run_ranges(bounds, body);
 }
 
 using detail::largest_coordinate;
@@ -431,6 +421,31 @@ std::vector<PointRange> point_parts(std::size_t n) {
   return {{0, n / 2}, {n / 2, n}};
 }
 
+// A pass that only counts and numbers voxels (Counted: the size search's, the thinning's first)
+// gives the same table for any split point: merge_later keeps first-seen order, and there are
+// no sums. So its split follows the measured cost. The first half of a scan can cost 2x the
+// second (near and far, dense and sparse parts of the scene: docs/performance.md, twelfth
+// round), which left one thread waiting a third of each pass. Each calling thread keeps the
+// share of the points that its last counting pass would have split evenly (counting_share).
+std::vector<PointRange> counting_parts(std::size_t n) {
+  if (n < kMinPointsToSplit) return {{0, n}};
+  const double share = std::clamp(detail::counting_share(), 0.0, 1.0);
+  const auto split = static_cast<std::size_t>(share * static_cast<double>(n));
+  return {{0, split}, {split, n}};
+}
+
+// The share of `n` points at which the two parts' measured times `ms` would have been equal,
+// taking each part's cost per point as constant; kept within [1/8, 7/8] so that one odd pass
+// cannot leave a part nearly empty.
+void rebalance(const std::vector<PointRange>& parts, const std::vector<double>& ms, std::size_t n) {
+  const double total = ms[0] + ms[1];
+  if (parts.size() != 2 || !(ms[0] > 0.0 && ms[1] > 0.0)) return;
+  const double share = static_cast<double>(parts[0].end) / static_cast<double>(n);
+  const double even = ms[0] >= total / 2 ? share * (total / 2) / ms[0]
+                                         : share + (1.0 - share) * (total / 2 - ms[0]) / ms[1];
+  detail::counting_share() = std::clamp(even, 0.125, 0.875);
+}
+
 // body(part) for every part, on up to `threads` threads (0 = every core).
 template <class Body>
 void for_parts(std::size_t parts, std::size_t threads, const Body& body) {
@@ -490,29 +505,30 @@ void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t li
   for (const std::uint32_t s : later.point_slots) t.point_slots.push_back(renumbered[s]);
 }
 
-// The table of every point of the cloud, made in its parts on up to `threads` threads.
+// The table of every point of the cloud, made in its parts on up to `threads` threads: fixed
+// halves (point_parts) where voxels sum their points, a measured split (counting_parts) where
+// they only count them.
 template <class Voxel>
 VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
                               std::size_t limit, bool record, std::size_t threads) {
-  const std::vector<PointRange> parts = point_parts(cloud.size());
+  constexpr bool counting = std::is_same_v<Voxel, Counted>;
+  const std::vector<PointRange> parts =
+      counting ? counting_parts(cloud.size()) : point_parts(cloud.size());
   std::vector<std::optional<VoxelTable<Voxel>>> tables(parts.size());
+  std::vector<double> ms(parts.size());
   for_parts(parts.size(), threads, [&](std::size_t part) {
+    const auto start = std::chrono::steady_clock::now();
     tables[part] = table_of<Voxel>(cloud, grid, parts[part], expected, limit, record);
+    ms[part] =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   });
+  if (counting) rebalance(parts, ms, cloud.size());
   VoxelTable<Voxel> table = std::move(*tables.front());
   if (record) table.point_slots.reserve(cloud.size());
   for (std::size_t part = 1; part < parts.size(); ++part) {
     merge_later(table, std::move(*tables[part]), limit);
   }
   return table;
-}
-
-template <class Voxel>
-VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
-                                    std::size_t threads) {
-  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
-  return voxel_table<Voxel>(cloud, grid, cloud.size() / 8, std::numeric_limits<std::size_t>::max(),
-                            false, threads);
 }
 
 // accumulate_voxels over the voxels of a complete counting pass, reusing its hashing: each part
@@ -533,6 +549,25 @@ VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted
     for (std::size_t s = 0; s < sums.front().size(); ++s) sums.front()[s] += sums[part][s];
   }
   return {std::move(counted.slots), std::move(counted.keys), std::move(sums.front()), {}};
+}
+
+// The voxels of a cloud with their sums. On two threads or more, a counting pass (its split
+// measured: counting_parts) numbers every point's voxel and the sums follow by slot in fixed
+// halves (accumulate_counted); on one, one pass hashes and sums. The sums are added in the same
+// order either way (each half's in point order, then the halves'), so the same table for any
+// thread count.
+template <class Voxel>
+VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
+                                    std::size_t threads) {
+  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
+  const std::size_t n = cloud.size();
+  constexpr std::size_t kNoLimit = std::numeric_limits<std::size_t>::max();
+  if (resolve_thread_count(threads) >= 2 && n >= kMinPointsToSplit &&
+      n <= std::numeric_limits<std::uint32_t>::max()) {
+    return accumulate_counted<Voxel>(
+        cloud, voxel_table<Counted>(cloud, grid, n / 8, kNoLimit, true, threads), threads);
+  }
+  return voxel_table<Voxel>(cloud, grid, n / 8, kNoLimit, false, threads);
 }
 
 // The centroids of a table's voxels, as a cloud measured from origin_m.
@@ -830,6 +865,11 @@ void validate_attributes(const PointCloud& cloud) {
 }  // namespace
 
 namespace detail {
+
+double& counting_share() {
+  thread_local double share = 0.5;
+  return share;
+}
 
 NeighborhoodSettings in_stored_frame(const NeighborhoodSettings& settings,
                                      const PointCloud& cloud) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -35,6 +36,46 @@ TEST(HelperThread, SplitsAJobIntoTwoHalvesAndPassesExceptionsOn) {
     if (begin == 0) after += static_cast<int>(end);
   });
   EXPECT_EQ(after, 2) << "the helper still serves after an exception";
+}
+
+// run_ranges: each range once, the first on the caller and the others on helpers that stay for
+// the next call; a call from within a range still runs (on threads of its own); exceptions
+// come back in range order.
+TEST(HelperThread, RunRangesKeepsItsHelpersAndNests) {
+  const std::vector<std::size_t> bounds{0, 3, 10, 16};
+  std::vector<std::thread::id> first(3);
+  for (int round = 0; round < 20; ++round) {
+    std::vector<int> visits(16, 0);
+    std::vector<std::thread::id> ids(3);
+    detail::run_ranges(bounds, [&](std::size_t begin, std::size_t end) {
+      const auto part =
+          static_cast<std::size_t>(std::find(bounds.begin(), bounds.end(), begin) - bounds.begin());
+      ids[part] = std::this_thread::get_id();
+      for (std::size_t i = begin; i < end; ++i) ++visits[i];
+    });
+    EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), 16);
+    EXPECT_EQ(ids[0], std::this_thread::get_id());
+    EXPECT_NE(ids[1], ids[2]);
+    if (round == 0) first = ids;
+    EXPECT_EQ(ids, first) << "the same helpers serve every call";
+  }
+  std::vector<int> inner(8, 0);
+  const std::vector<std::size_t> halves{0, 4, 8};
+  detail::run_ranges(halves, [&](std::size_t begin, std::size_t) {
+    if (begin != 0) return;
+    detail::run_ranges(halves, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) ++inner[i];
+    });
+  });
+  EXPECT_EQ(std::count(inner.begin(), inner.end(), 1), 8);
+  try {
+    detail::run_ranges(bounds, [&](std::size_t begin, std::size_t) {
+      if (begin > 0) throw std::runtime_error("range at " + std::to_string(begin));
+    });
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "range at 3");
+  }
 }
 
 }  // namespace

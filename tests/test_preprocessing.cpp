@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
 
+#include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/nearest_neighbor.hpp"
 #include "sgdicp/preprocessing.hpp"
@@ -447,6 +448,20 @@ TEST(VoxelDownsample, HalvesMergeToTheOnePassResultOnAnyThreadCount) {
   EXPECT_EQ(surfaces_two.points, one.points);
   EXPECT_EQ(surfaces_two.normals, surfaces_one.normals);
   EXPECT_EQ(surfaces_two.covariances, surfaces_one.covariances);
+  // On two threads a counting pass numbers the voxels at a split its last pass measured as
+  // even (any split: the same table), and the sums follow in the fixed halves.
+  sgdicp::detail::counting_share() = 0.5;
+  const double size_at_half = voxel_size_for_count(cloud, 2000);
+  for (const double share : {0.0, 0.2, 0.5, 0.77, 1.0}) {
+    SCOPED_TRACE(share);
+    sgdicp::detail::counting_share() = share;
+    EXPECT_EQ(sgdicp::voxel_downsample(cloud, voxel, 2).points, one.points);
+    sgdicp::detail::counting_share() = share;
+    EXPECT_EQ(sgdicp::voxel_downsample_with_surfaces(cloud, voxel, settings).covariances,
+              surfaces_one.covariances);
+    sgdicp::detail::counting_share() = share;
+    EXPECT_EQ(voxel_size_for_count(cloud, 2000), size_at_half);
+  }
   EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, voxel, 5000), InvalidSettingsError);
 }
 
