@@ -356,7 +356,9 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   result.T_reference_source =
       orthonormalized(run.minimise(frame.to_stored(orthonormalized(T_init)), result));
   detail::conclude(result, src.cloud(), reference, run.max_distance_m(),
-                   EvaluationSettings{settings.evaluation_points, settings.check_degeneracy},
+                   EvaluationSettings{.evaluation_points = settings.evaluation_points,
+                                      .check_degeneracy = settings.check_degeneracy,
+                                      .num_threads = settings.num_threads},
                    clock);
   frame.to_clouds(result);
   return result;

@@ -1,13 +1,17 @@
 #include "sgdicp/evaluation.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
 
+#include "helper_thread.hpp"
 #include "point_surfaces.hpp"
+#include "sgdicp/threads.hpp"
 
 namespace sgdicp {
 namespace {
@@ -31,6 +35,11 @@ Eigen::Vector3d reference_normal(const ReferenceIndex& reference, std::uint32_t 
   return detail::estimate_surface(reference, index, stored, scratch).normal.cast<double>();
 }
 
+// Fewer inlier queries than this are not worth waking a helper thread for; the queries are made
+// in blocks of kSampleBlock (their results held until summed in order).
+constexpr std::size_t kMinSamplesToSplit = 256;
+constexpr std::size_t kSampleBlock = 4096;
+
 // A source point moved into the reference frame and its nearest reference point.
 struct Pair {
   Eigen::Vector3d moved;
@@ -53,19 +62,38 @@ struct MovedSource {
 // Counts the inliers among `samples` spread source points and fills evaluated_points, inliers,
 // inlier_ratio and inlier_rmse_m; returns the pairs when `keep_pairs` (for the degeneracy check).
 std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex& reference,
-                                std::size_t samples, bool keep_pairs, RegistrationResult& result) {
+                                std::size_t samples, bool keep_pairs, std::size_t threads,
+                                RegistrationResult& result) {
   const std::size_t n = source.size();
+  const bool split = resolve_thread_count(threads) >= 2;
+  // The queries (most of the evaluation) into one slot per sample of a block, in two halves on
+  // two threads; the sums follow in sample order here, so the values do not depend on the
+  // thread count.
+  std::vector<Eigen::Vector3f> moved(std::min(samples, kSampleBlock));
+  std::vector<std::optional<Neighbor>> found(moved.size());
   std::vector<Pair> pairs;
   double sum_sq = 0.0;
-  result.evaluated_points = 0;
-  for (std::size_t k = 0; k < samples; ++k) {
-    const std::size_t i = sample_index(k, samples, n);
-    ++result.evaluated_points;
-    const Eigen::Vector3f moved = source.point(i);
-    if (const auto nn = reference.nearest(moved, source.max_sq)) {
-      sum_sq += nn->squared_distance;
-      if (keep_pairs) pairs.push_back({moved.cast<double>(), nn->index});
-      ++result.inliers;
+  result.evaluated_points = samples;
+  for (std::size_t first = 0; first < samples; first += kSampleBlock) {
+    const std::size_t count = std::min(kSampleBlock, samples - first);
+    const auto query = [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) {
+        moved[k] = source.point(sample_index(first + k, samples, n));
+        found[k] = reference.nearest(moved[k], source.max_sq);
+      }
+    };
+    if (split && count >= kMinSamplesToSplit) {
+      const std::array<std::size_t, 3> halves{0, count / 2, count};
+      detail::run_ranges(halves, query);
+    } else {
+      query(0, count);
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      if (const auto& nn = found[k]) {
+        sum_sq += nn->squared_distance;
+        if (keep_pairs) pairs.push_back({moved[k].cast<double>(), nn->index});
+        ++result.inliers;
+      }
     }
   }
   result.inlier_ratio =
@@ -171,8 +199,8 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                                  result.T_reference_source.topLeftCorner<3, 3>().cast<float>(),
                                  result.T_reference_source.topRightCorner<3, 1>().cast<float>(),
                                  static_cast<float>(max_distance_m * max_distance_m)};
-  std::vector<Pair> pairs =
-      count_inliers(moved_source, reference, samples, settings.check_degeneracy, result);
+  std::vector<Pair> pairs = count_inliers(moved_source, reference, samples,
+                                          settings.check_degeneracy, settings.num_threads, result);
   if (!settings.check_degeneracy) return;
   // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
   // draws its own sample then.

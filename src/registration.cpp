@@ -1,6 +1,7 @@
 #include "sgdicp/registration.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -53,9 +54,7 @@ class MiniBatchPairing {
         kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())) {
     pairs_.reserve(settings.batch_size);
     use_cost(settings.cost);
-    if (resolve_thread_count(settings.num_threads) >= 2) {
-      helper_ = std::make_unique<detail::HelperThread>();
-    }
+    split_queries_ = resolve_thread_count(settings.num_threads) >= 2;
   }
 
   [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
@@ -112,8 +111,9 @@ class MiniBatchPairing {
         pair.distance = nn ? std::sqrt(nn->squared_distance) / k : 0.0f;
       }
     };
-    if (helper_ && batch.size() >= kMinSplitBatch) {
-      helper_->split(batch.size(), part);
+    if (split_queries_ && batch.size() >= kMinSplitBatch) {
+      const std::array<std::size_t, 3> halves{0, batch.size() / 2, batch.size()};
+      detail::run_ranges(halves, part);
     } else {
       part(0, batch.size());
     }
@@ -176,8 +176,9 @@ class MiniBatchPairing {
   CostType cost_ = CostType::point_to_point;
   bool plain_ = false;
   std::vector<Pair> pairs_;  // one slot per batch point, then the pairs the cost uses
-  // With num_threads >= 2: the second thread of the batches' queries (helper_thread.hpp).
-  std::unique_ptr<detail::HelperThread> helper_;
+  // With num_threads >= 2 the batches' queries are split with the calling thread's helper
+  // (helper_thread.hpp).
+  bool split_queries_ = false;
 };
 
 // One SGD-ICP run in the scaled space: Algorithm 1, then the refinement stages.
@@ -372,8 +373,10 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   // The degeneracy check reads the reference normals the run estimated (or would have).
   detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
-                   EvaluationSettings{settings.evaluation_points, settings.check_degeneracy}, clock,
-                   [&run](std::uint32_t i) { return run.reference_normal(i); });
+                   EvaluationSettings{.evaluation_points = settings.evaluation_points,
+                                      .check_degeneracy = settings.check_degeneracy,
+                                      .num_threads = settings.num_threads},
+                   clock, [&run](std::uint32_t i) { return run.reference_normal(i); });
   frame.to_clouds(result);
   return result;
 }

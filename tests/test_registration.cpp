@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "sgdicp/error.hpp"
+#include "sgdicp/evaluation.hpp"
 #include "sgdicp/io.hpp"
 #include "sgdicp/metrics.hpp"
 #include "sgdicp/pairs.hpp"
@@ -514,6 +515,34 @@ TEST(SmallSource, AWholeSourceBatchConvergesDespiteAPairingCycle) {
   EXPECT_TRUE(r.converged) << r.message;
   EXPECT_LT(r.iterations, 1000U);
   EXPECT_LT(rotation_error_geodesic(r.T_reference_source, pair.T_reference_source_gt), 0.5 * kDeg);
+}
+
+// The final statistics' inlier queries in two halves on two threads, in blocks of 4,096 samples:
+// the same inliers, RMSE and constraint ratio as on one thread, and the count a direct query of
+// every source point gives.
+TEST(Threads, FinalStatisticsOnTwoThreadsCountEveryInlierOnce) {
+  const PointCloud reference = synthetic_scene(63, 20000);
+  PointCloud source = synthetic_scene(64, 9000);
+  for (std::size_t i = 0; i < source.size(); i += 7) source.points[i].z() += 5.0F;  // outliers
+  const ReferenceIndex index(reference);
+  RegistrationResult one;
+  one.T_reference_source = make_transform(0.5 * kDeg, 0, -1 * kDeg, {0.01, 0.02, 0});
+  RegistrationResult two = one;
+  EvaluationSettings settings;
+  settings.evaluation_points = 0;  // every point: three blocks
+  evaluate_alignment(source, index, 0.05, settings, one);
+  settings.num_threads = 2;
+  evaluate_alignment(source, index, 0.05, settings, two);
+  std::size_t expected = 0;
+  const Eigen::Affine3f T(one.T_reference_source.cast<float>());
+  for (const auto& p : source.points) expected += index.nearest(T * p, 0.05F * 0.05F) ? 1 : 0;
+  EXPECT_GT(expected, 1000U);
+  EXPECT_LT(expected, source.size());
+  EXPECT_EQ(one.evaluated_points, source.size());
+  EXPECT_EQ(one.inliers, expected);
+  EXPECT_EQ(two.inliers, expected);
+  EXPECT_EQ(two.inlier_rmse_m, one.inlier_rmse_m);
+  EXPECT_EQ(two.constraint_ratio, one.constraint_ratio);
 }
 
 // Two threads split each mini-batch's queries (and the voxel passes: clouds of >= 32,768

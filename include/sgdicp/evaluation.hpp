@@ -35,6 +35,10 @@ struct EvaluationSettings {
   /// Neighbours for reference normals when the reference cloud has none (the estimator of
   /// estimate_normals, preprocessing.hpp; clamped to its range [3, 1000]).
   std::size_t normal_neighbors = 10;
+  /// Threads for the inlier queries: 1, or two halves on two threads for 0 (every core) and
+  /// more (a registration passes its num_threads). The same values for any count: the sums are
+  /// made in sample order on the calling thread.
+  std::size_t num_threads = 1;
 };
 
 /// The unit normal of reference point i (or zero where the surface defines none).
