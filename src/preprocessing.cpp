@@ -438,8 +438,8 @@ std::vector<PointRange> counting_parts(std::size_t n) {
 // taking each part's cost per point as constant; kept within [1/8, 7/8] so that one odd pass
 // cannot leave a part nearly empty.
 void rebalance(const std::vector<PointRange>& parts, const std::vector<double>& ms, std::size_t n) {
-  const double total = ms[0] + ms[1];
   if (parts.size() != 2 || !(ms[0] > 0.0 && ms[1] > 0.0)) return;
+  const double total = ms[0] + ms[1];
   const double share = static_cast<double>(parts[0].end) / static_cast<double>(n);
   const double even = ms[0] >= total / 2 ? share * (total / 2) / ms[0]
                                          : share + (1.0 - share) * (total / 2 - ms[0]) / ms[1];

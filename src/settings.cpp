@@ -309,7 +309,8 @@ constexpr std::string_view kDownsampleToHelp =
     "points, or with normals or covariances given, are used as they are; 0 = no downsampling";
 constexpr std::string_view kThreadsHelp =
     "Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs "
-    "the grid's reference normals, and the SGD mini-batches' queries on a second thread), "
+    "the grid's reference normals, the SGD mini-batches' queries and the final statistics' on "
+    "a second thread), "
     "0 = every core; the result is the same for any count";
 constexpr std::string_view kNeighborsHelp =
     "Plane costs: neighbours per point (itself included) for normals and covariances";
