@@ -523,11 +523,12 @@ void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t li
 
 // The table of every point of the cloud, made in its parts on up to `threads` threads: fixed
 // halves (point_parts) where voxels sum their points, a measured split (counting_parts) where
-// they only count them.
+// they only count them on two threads or more.
 template <class Voxel>
 VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
                               std::size_t limit, bool record, std::size_t threads) {
-  constexpr bool counting = std::is_same_v<Voxel, Counted>;
+  // One thread makes the parts in turn: their split only moves the merge, so it stays fixed.
+  const bool counting = std::is_same_v<Voxel, Counted> && resolve_thread_count(threads) >= 2;
   const std::vector<PointRange> parts =
       counting ? counting_parts(cloud.size()) : point_parts(cloud.size());
   std::vector<std::optional<VoxelTable<Voxel>>> tables(parts.size());

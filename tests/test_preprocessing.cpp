@@ -449,9 +449,15 @@ TEST(VoxelDownsample, HalvesMergeToTheOnePassResultOnAnyThreadCount) {
   EXPECT_EQ(surfaces_two.normals, surfaces_one.normals);
   EXPECT_EQ(surfaces_two.covariances, surfaces_one.covariances);
   // On two threads a counting pass numbers the voxels at a split its last pass measured as
-  // even (any split: the same table), and the sums follow in the fixed halves.
-  sgdicp::detail::counting_share() = 0.5;
-  const double size_at_half = voxel_size_for_count(cloud, 2000);
+  // even (any split: the same table), and the sums follow in the fixed halves; the size search
+  // (a registration's grid) counts the same way.
+  settings.num_threads = 1;
+  const auto grid_on = [&](const NeighborhoodSettings& s) {
+    return sgdicp::detail::registration_index(cloud, 0.0, 2000, s, true, {});
+  };
+  const sgdicp::ReferenceIndex grid_one = grid_on(settings);
+  ASSERT_GT(grid_one.voxel_size_m(), 0.0);
+  settings.num_threads = 2;
   for (const double share : {0.0, 0.2, 0.5, 0.77, 1.0}) {
     SCOPED_TRACE(share);
     sgdicp::detail::counting_share() = share;
@@ -460,7 +466,10 @@ TEST(VoxelDownsample, HalvesMergeToTheOnePassResultOnAnyThreadCount) {
     EXPECT_EQ(sgdicp::voxel_downsample_with_surfaces(cloud, voxel, settings).covariances,
               surfaces_one.covariances);
     sgdicp::detail::counting_share() = share;
-    EXPECT_EQ(voxel_size_for_count(cloud, 2000), size_at_half);
+    const sgdicp::ReferenceIndex grid_two = grid_on(settings);
+    EXPECT_EQ(grid_two.voxel_size_m(), grid_one.voxel_size_m());
+    EXPECT_EQ(grid_two.cloud().points, grid_one.cloud().points);
+    EXPECT_EQ(grid_two.cloud().covariances, grid_one.cloud().covariances);
   }
   EXPECT_THROW((void)sgdicp::voxel_downsample(cloud, voxel, 5000), InvalidSettingsError);
 }
