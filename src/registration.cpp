@@ -143,15 +143,39 @@ class MiniBatchPairing {
     pairs_.resize(keep);
   }
 
-  // Any cost of cost.hpp with its kernel: rho(e^T Omega e).
+  // Any cost of cost.hpp with its kernel: rho(e^T Omega e). With a helper and every surface the
+  // cost reads already stored (nothing estimated on first use, which is not thread-safe), the
+  // pairs' terms are made in two halves, one slot each, and added here in pair order: the same
+  // sums as on one thread.
   void add_general(const EulerPoseJacobian& pose, CostAccumulator& cost,
                    std::vector<float>& distances) {
-    const PointCloud& ref = reference_.cloud();
+    const auto term_of = [&](const Pair& pair) {
+      const Eigen::Vector3d r = scaling_.to_scaled(reference_.cloud().points[pair.reference_index]);
+      return cost.term(pose.jacobian(pair.s), pair.moved - r, information(pair, pose.rotation()));
+    };
+    if (split_queries_ && pairs_.size() >= kMinSplitBatch && surfaces_stored()) {
+      terms_.resize(pairs_.size());
+      const std::array<std::size_t, 3> halves{0, pairs_.size() / 2, pairs_.size()};
+      detail::run_ranges(halves, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) terms_[k] = term_of(pairs_[k]);
+      });
+      for (std::size_t k = 0; k < pairs_.size(); ++k) {
+        cost.add(terms_[k]);
+        distances.push_back(pairs_[k].distance);
+      }
+      return;
+    }
     for (const Pair& pair : pairs_) {
-      const Eigen::Vector3d r = scaling_.to_scaled(ref.points[pair.reference_index]);
-      cost.add(pose.jacobian(pair.s), pair.moved - r, information(pair, pose.rotation()));
+      cost.add(term_of(pair));
       distances.push_back(pair.distance);
     }
+  }
+
+  // Whether the cost reads only normals and covariances the clouds store.
+  [[nodiscard]] bool surfaces_stored() const {
+    const PointCloud& ref = reference_.cloud();
+    if (needs_reference_normals(cost_) && !ref.has_normals()) return false;
+    return !needs_covariances(cost_) || (ref.has_covariances() && source_.has_covariances());
   }
 
   // Omega of a pair (cost.hpp), with only what the cost reads looked up or estimated.
@@ -176,6 +200,7 @@ class MiniBatchPairing {
   CostType cost_ = CostType::point_to_point;
   bool plain_ = false;
   std::vector<Pair> pairs_;  // one slot per batch point, then the pairs the cost uses
+  std::vector<CostAccumulator::PairTerm> terms_;  // one per pair, when made in two halves
   // With num_threads >= 2 the batches' queries are split with the calling thread's helper
   // (helper_thread.hpp).
   bool split_queries_ = false;

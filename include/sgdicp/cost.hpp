@@ -121,15 +121,37 @@ class CostAccumulator {
   CostAccumulator(KernelType kernel, double kernel_scale, bool with_hessian)
       : kernel_(kernel), kernel_scale_(kernel_scale), with_hessian_(with_hessian) {}
 
-  /// Adds a pair with residual e, Jacobian j = de/dtheta and information matrix omega.
-  void add(const PoseJacobianMatrix& j, const Eigen::Vector3d& e, const Eigen::Matrix3d& omega) {
+  /// What one pair adds: w J^T Omega e, w J^T Omega J (when the Hessian is kept) and rho.
+  struct PairTerm {
+    PoseVector jte;
+    PoseMatrix jtj;
+    double rho;
+  };
+
+  /// The term of a pair with residual e, Jacobian j = de/dtheta and information matrix omega;
+  /// a pure function, so terms may be made on any thread and added in order (add(PairTerm)).
+  [[nodiscard]] PairTerm term(const PoseJacobianMatrix& j, const Eigen::Vector3d& e,
+                              const Eigen::Matrix3d& omega) const {
     const Eigen::Vector3d omega_e = omega * e;
     const double s = e.dot(omega_e);
     const double w = kernel_weight(kernel_, s, kernel_scale_);
-    jte_.noalias() += w * (j.transpose() * omega_e);
-    if (with_hessian_) jtj_.noalias() += w * (j.transpose() * omega * j);
-    cost_ += kernel_rho(kernel_, s, kernel_scale_);
+    PairTerm t;
+    t.jte.noalias() = w * (j.transpose() * omega_e);
+    if (with_hessian_) t.jtj.noalias() = w * (j.transpose() * omega * j);
+    t.rho = kernel_rho(kernel_, s, kernel_scale_);
+    return t;
+  }
+
+  void add(const PairTerm& t) {
+    jte_ += t.jte;
+    if (with_hessian_) jtj_ += t.jtj;
+    cost_ += t.rho;
     ++pairs_;
+  }
+
+  /// Adds a pair with residual e, Jacobian j = de/dtheta and information matrix omega.
+  void add(const PoseJacobianMatrix& j, const Eigen::Vector3d& e, const Eigen::Matrix3d& omega) {
+    add(term(j, e, omega));
   }
 
   /// The same for Omega = I without a kernel (the paper's cost): fewer operations in the
