@@ -396,26 +396,13 @@ struct Moments : Centroid {
 // Every occupied voxel of a grid, in the order of its first point, with what Voxel keeps; the
 // points' slots when recorded (the voxel size search's settling pass, reused by the thinning
 // instead of hashing every point again: 6 % of a default registration on a Kinect frame).
-// The slots of the points from later_begin on are in the numbering of the later part they were
-// counted in (merge_later), mapped by later_to_table: renumbering them one by one was a serial
-// 0.3-0.4 ms per pass on a Kinect frame (docs/performance.md, thirteenth round).
 template <class Voxel>
 struct VoxelTable {
   VoxelSlots slots;
-  detail::RecycledVector<VoxelKey> keys{};  // by slot
-  detail::RecycledVector<Voxel> voxels{};   // by slot
-  detail::RecycledVector<std::uint32_t> point_slots{};
-  std::size_t later_begin = std::numeric_limits<std::size_t>::max();
-  detail::RecycledVector<std::uint32_t> later_to_table{};
+  detail::RecycledVector<VoxelKey> keys;  // by slot
+  detail::RecycledVector<Voxel> voxels;   // by slot
+  detail::RecycledVector<std::uint32_t> point_slots;
   bool over_limit = false;  // a counting pass stopped above its limit: keys and voxels partial
-
-  // body(i, slot) for the points i in [begin, end) of a recorded table, in order.
-  template <class Body>
-  void for_each_slot(std::size_t begin, std::size_t end, const Body& body) const {
-    const std::size_t direct_end = std::min(end, std::max(begin, later_begin));
-    for (std::size_t i = begin; i < direct_end; ++i) body(i, point_slots[i]);
-    for (std::size_t i = direct_end; i < end; ++i) body(i, later_to_table[point_slots[i]]);
-  }
 };
 
 // The passes over raw points (the size search's counting, the thinning) hash and sum two fixed
@@ -473,7 +460,7 @@ void for_parts(std::size_t parts, std::size_t threads, const Body& body) {
 template <class Voxel>
 VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, PointRange range,
                            std::size_t expected, std::size_t limit, bool record) {
-  VoxelTable<Voxel> t{.slots = VoxelSlots(expected)};
+  VoxelTable<Voxel> t{VoxelSlots(expected), {}, {}, {}};
   if (record) t.point_slots.reserve(range.end - range.begin);
   for (std::size_t i = range.begin; i < range.end; ++i) {
     const Eigen::Vector3f& p = cloud.points[i];
@@ -494,9 +481,8 @@ VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, Point
   return t;
 }
 
-// Appends `later` (the table of the points after those of `t`, which has no later part yet) to
-// `t`: its voxels in its own first-seen order, sums added after t's, its point slots appended
-// with the map to t's numbering.
+// Appends `later` (the table of the points after those of `t`) to `t`: its voxels in its own
+// first-seen order, sums added after t's, point slots renumbered.
 template <class Voxel>
 void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t limit) {
   t.over_limit = t.over_limit || later.over_limit;
@@ -516,9 +502,7 @@ void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t li
     t.point_slots.clear();
     return;
   }
-  t.later_begin = t.point_slots.size();
-  t.later_to_table = std::move(renumbered);
-  t.point_slots.insert(t.point_slots.end(), later.point_slots.begin(), later.point_slots.end());
+  for (const std::uint32_t s : later.point_slots) t.point_slots.push_back(renumbered[s]);
 }
 
 // The table of every point of the cloud, made in its parts on up to `threads` threads: fixed
@@ -542,7 +526,9 @@ VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, st
   if (counting) rebalance(parts, ms, cloud.size());
   VoxelTable<Voxel> table = std::move(*tables.front());
   if (record) table.point_slots.reserve(cloud.size());
-  if (parts.size() == 2) merge_later(table, std::move(*tables[1]), limit);  // at most two parts
+  for (std::size_t part = 1; part < parts.size(); ++part) {
+    merge_later(table, std::move(*tables[part]), limit);
+  }
   return table;
 }
 
@@ -556,16 +542,14 @@ VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted
   for_parts(parts.size(), threads, [&](std::size_t part) {
     detail::RecycledVector<Voxel>& voxels = sums[part];
     voxels.resize(counted.keys.size());
-    counted.for_each_slot(
-        parts[part].begin, parts[part].end,
-        [&](std::size_t i, std::uint32_t slot) { voxels[slot].add(cloud.points[i]); });
+    for (std::size_t i = parts[part].begin; i < parts[part].end; ++i) {
+      voxels[counted.point_slots[i]].add(cloud.points[i]);
+    }
   });
   for (std::size_t part = 1; part < parts.size(); ++part) {
     for (std::size_t s = 0; s < sums.front().size(); ++s) sums.front()[s] += sums[part][s];
   }
-  return {.slots = std::move(counted.slots),
-          .keys = std::move(counted.keys),
-          .voxels = std::move(sums.front())};
+  return {std::move(counted.slots), std::move(counted.keys), std::move(sums.front()), {}};
 }
 
 // The voxels of a cloud with their sums. On two threads or more, a counting pass (its split
