@@ -121,22 +121,47 @@ class HelperThread {
   std::jthread thread_;  // last: starts after the members above exist, joins before they go
 };
 
-/// body(bounds[t], bounds[t + 1]) for every t < bounds.size() - 1: the first range on the
-/// calling thread, the others on its own helpers, started on its first parallel pass and kept
-/// until it ends (they sleep after ~50 us without work). Returns when all ranges are done;
-/// rethrows the first exception in range order. A call made from within a range runs on
-/// threads of its own (std::jthread), as does any call made while the helpers serve another.
+/// The calling thread's helpers for run_ranges (one set per thread).
 struct ThreadHelpers {
   std::vector<std::unique_ptr<HelperThread>> helpers;
   bool serving = false;  // a run_ranges of this thread is under way
 };
 
-/// The calling thread's helpers (one set per thread, not per caller).
 inline ThreadHelpers& thread_helpers() {
   thread_local ThreadHelpers team;
   return team;
 }
 
+inline void rethrow_first(const std::vector<std::exception_ptr>& errors) {
+  for (const auto& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+}
+
+/// run_ranges on threads started for this call (a nested call: the helpers are busy).
+template <class Body>
+void run_ranges_on_new_threads(std::span<const std::size_t> bounds, const Body& body) {
+  std::vector<std::exception_ptr> errors(bounds.size() - 1);
+  const auto run = [&](std::size_t t) {
+    try {
+      body(bounds[t], bounds[t + 1]);
+    } catch (...) {
+      errors[t] = std::current_exception();
+    }
+  };
+  {
+    std::vector<std::jthread> workers;
+    for (std::size_t t = 1; t < errors.size(); ++t) workers.emplace_back(run, t);
+    run(0);
+  }  // jthreads join here
+  rethrow_first(errors);
+}
+
+/// body(bounds[t], bounds[t + 1]) for every t < bounds.size() - 1: the first range on the
+/// calling thread, the others on its own helpers, started on its first parallel pass and kept
+/// until it ends (they sleep after ~50 us without work). Returns when all ranges are done;
+/// rethrows the first exception in range order. A call made from within a range runs on
+/// threads of its own, so that it never waits for a helper that runs it.
 template <class Body>
 void run_ranges(std::span<const std::size_t> bounds, const Body& body) {
   const std::size_t parts = bounds.size() - 1;
@@ -145,27 +170,13 @@ void run_ranges(std::span<const std::size_t> bounds, const Body& body) {
     return;
   }
   ThreadHelpers& team = thread_helpers();
-  auto& helpers = team.helpers;
-  std::vector<std::exception_ptr> errors(parts);
   if (team.serving) {
-    const auto run = [&](std::size_t t) {
-      try {
-        body(bounds[t], bounds[t + 1]);
-      } catch (...) {
-        errors[t] = std::current_exception();
-      }
-    };
-    {
-      std::vector<std::jthread> workers;
-      for (std::size_t t = 1; t < parts; ++t) workers.emplace_back(run, t);
-      run(0);
-    }  // jthreads join here
-    for (const auto& error : errors) {
-      if (error) std::rethrow_exception(error);
-    }
+    run_ranges_on_new_threads(bounds, body);
     return;
   }
+  auto& helpers = team.helpers;
   while (helpers.size() + 1 < parts) helpers.push_back(std::make_unique<HelperThread>());
+  std::vector<std::exception_ptr> errors(parts);
   team.serving = true;
   for (std::size_t t = 1; t < parts; ++t) helpers[t - 1]->start(body, bounds[t], bounds[t + 1]);
   try {
@@ -175,15 +186,13 @@ void run_ranges(std::span<const std::size_t> bounds, const Body& body) {
   }
   for (std::size_t t = 1; t < parts; ++t) {
     try {
-      helpers[t - 1]->finish();
+      helpers[t - 1]->finish();  // the helpers read the caller's data: wait for each
     } catch (...) {
       errors[t] = std::current_exception();
     }
   }
   team.serving = false;
-  for (const auto& error : errors) {
-    if (error) std::rethrow_exception(error);
-  }
+  rethrow_first(errors);
 }
 
 }  // namespace sgdicp::detail

@@ -454,8 +454,9 @@ class Settings:
     """
     num_threads: int
     """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
-    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 =
-    every core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    the grid's reference normals, the SGD mini-batches' queries and the final statistics' on a
+    second thread), 0 = every core; the result is the same for any count, in [0, 1024]. Keyword
+    threads=. Default 1.
     """
     voxel_size_m: float
     """Thin both clouds to one point (the centroid) per voxel of this side before registering
@@ -707,8 +708,9 @@ class BatchSettings:
     """
     num_threads: int
     """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
-    the grid's reference normals, and the SGD mini-batches' queries on a second thread), 0 =
-    every core; the result is the same for any count, in [0, 1024]. Keyword threads=. Default 1.
+    the grid's reference normals, the SGD mini-batches' queries and the final statistics' on a
+    second thread), 0 = every core; the result is the same for any count, in [0, 1024]. Keyword
+    threads=. Default 1.
     """
     voxel_size_m: float
     """Thin both clouds to one point (the centroid) per voxel of this side before registering
