@@ -14,6 +14,8 @@
 #include <thread>
 #include <vector>
 
+#include <unistd.h>
+
 namespace sgdicp::detail {
 
 class HelperThread {
@@ -124,11 +126,29 @@ class HelperThread {
 /// The calling thread's helpers for run_ranges (one set per thread).
 struct ThreadHelpers {
   std::vector<std::unique_ptr<HelperThread>> helpers;
-  bool serving = false;  // a run_ranges of this thread is under way
+  bool serving = false;      // a run_ranges of this thread is under way
+  pid_t process = getpid();  // the process whose threads the helpers are
+
+  ThreadHelpers() = default;
+  ThreadHelpers(const ThreadHelpers&) = delete;
+  ThreadHelpers& operator=(const ThreadHelpers&) = delete;
+  ~ThreadHelpers() { forget_if_forked(); }
+
+  // A child of fork() (Python's multiprocessing, say) has none of its parent's threads: handing
+  // work to the helpers it inherited, or joining them, would wait forever. It forgets them (their
+  // memory is the parent's copy) and starts its own.
+  void forget_if_forked() {
+    if (getpid() == process) return;
+    for (auto& helper : helpers) static_cast<void>(helper.release());
+    helpers.clear();
+    serving = false;
+    process = getpid();
+  }
 };
 
 inline ThreadHelpers& thread_helpers() {
   thread_local ThreadHelpers team;
+  team.forget_if_forked();
   return team;
 }
 

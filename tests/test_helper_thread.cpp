@@ -8,6 +8,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace sgdicp {
 namespace {
@@ -76,6 +78,30 @@ TEST(HelperThread, RunRangesKeepsItsHelpersAndNests) {
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "range at 3");
   }
+}
+
+// A child of fork() has none of the parent's helper threads: its passes start their own instead
+// of waiting for the inherited ones forever (an alarm ends a hung child, which fails the test).
+TEST(ForkedProcess, RunsRangesOnHelpersOfItsOwn) {
+  const std::vector<std::size_t> halves{0, 50, 100};
+  std::vector<int> visits(100, 0);
+  const auto count = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) ++visits[i];
+  };
+  detail::run_ranges(halves, count);  // the parent's helper exists now
+  const pid_t child = fork();
+  ASSERT_NE(child, -1);
+  if (child == 0) {
+    alarm(20);
+    std::fill(visits.begin(), visits.end(), 0);
+    detail::run_ranges(halves, count);
+    _exit(std::count(visits.begin(), visits.end(), 1) == 100 ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child hung or crashed";
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), 100);
 }
 
 }  // namespace
