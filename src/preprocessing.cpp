@@ -247,14 +247,14 @@ std::size_t hash_of(const VoxelKey& key) {
 // end to end on 7-Scenes, KITTI and the ETH map, even elsewhere; performance.md, 11th round).
 class VoxelSlots {
  public:
+  // An empty entry's slot.
+  static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+
   explicit VoxelSlots(std::size_t expected) {
     rehash(std::bit_ceil(std::max<std::size_t>(64, expected + expected / 4)));
   }
 
   [[nodiscard]] std::size_t size() const { return size_; }
-
-  // An empty entry's slot.
-  static constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
   // The slot of `key`, a new one (= size() before the call) if it was not there. Scans and
   // depth images visit a voxel in runs: the table is probed only when the key changes.
@@ -263,6 +263,15 @@ class VoxelSlots {
     last_key_ = key;
     last_slot_ = find_or_add(key);
     return last_slot_;
+  }
+
+  // The slot of `key`, or kNone: read-only, so that threads can look up at once.
+  [[nodiscard]] std::size_t find(const VoxelKey& key) const {
+    const std::size_t mask = entries_.size() - 1;
+    for (std::size_t i = hash_of(key) & mask;; i = (i + 1) & mask) {
+      const Entry& e = entries_[i];
+      if (e.slot == kNone || e.key == key) return e.slot;
+    }
   }
 
  private:
@@ -398,7 +407,7 @@ struct Moments : Centroid {
 // instead of hashing every point again: 6 % of a default registration on a Kinect frame).
 template <class Voxel>
 struct VoxelTable {
-  VoxelSlots slots;
+  VoxelSlots slots;  // once parts are merged, the first part's only (merge_later)
   detail::RecycledVector<VoxelKey> keys;  // by slot
   detail::RecycledVector<Voxel> voxels;   // by slot
   detail::RecycledVector<std::uint32_t> point_slots;
@@ -481,15 +490,39 @@ VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, Point
   return t;
 }
 
+// Where each of `keys` is in `slots` (kNone: not there), in two halves on two threads: the
+// look-ups only read the table. Half of a merge's time was these look-ups, each a cache miss
+// (docs/performance.md, fourteenth round).
+detail::RecycledVector<std::size_t> look_up(const VoxelSlots& slots,
+                                            const detail::RecycledVector<VoxelKey>& keys,
+                                            std::size_t threads) {
+  constexpr std::size_t kMinKeysToSplit = 4096;
+  detail::RecycledVector<std::size_t> found(keys.size());
+  const std::size_t used = keys.size() < kMinKeysToSplit ? 1 : resolve_thread_count(threads);
+  parallel_chunks(keys.size(), std::min<std::size_t>(used, 2),
+                  [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t s = begin; s < end; ++s) found[s] = slots.find(keys[s]);
+                  });
+  return found;
+}
+
 // Appends `later` (the table of the points after those of `t`) to `t`: its voxels in its own
-// first-seen order, sums added after t's, point slots renumbered.
+// first-seen order, sums added after t's, point slots renumbered. The new voxels are not
+// hashed into t.slots: nothing looks a voxel up once its table is complete.
 template <class Voxel>
-void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t limit) {
+void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t limit,
+                 std::size_t threads) {
   t.over_limit = t.over_limit || later.over_limit;
+  if (t.over_limit) {
+    t.point_slots.clear();
+    return;
+  }
+  const detail::RecycledVector<std::size_t> found = look_up(t.slots, later.keys, threads);
   detail::RecycledVector<std::uint32_t> renumbered(later.voxels.size());
   for (std::size_t s = 0; s < later.voxels.size() && !t.over_limit; ++s) {
-    const std::size_t slot = t.slots.slot(later.keys[s]);
-    if (slot == t.voxels.size()) {
+    std::size_t slot = found[s];
+    if (slot == VoxelSlots::kNone) {
+      slot = t.voxels.size();
       t.over_limit = slot == limit;
       t.keys.push_back(later.keys[s]);
       t.voxels.push_back(later.voxels[s]);
@@ -502,7 +535,14 @@ void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t li
     t.point_slots.clear();
     return;
   }
-  for (const std::uint32_t s : later.point_slots) t.point_slots.push_back(renumbered[s]);
+  const std::size_t first = t.point_slots.size();
+  t.point_slots.resize(first + later.point_slots.size());
+  parallel_chunks(later.point_slots.size(), resolve_threads(threads, later.point_slots.size()),
+                  [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t i = begin; i < end; ++i) {
+                      t.point_slots[first + i] = renumbered[later.point_slots[i]];
+                    }
+                  });
 }
 
 // The table of every point of the cloud, made in its parts on up to `threads` threads: fixed
@@ -527,7 +567,7 @@ VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, st
   VoxelTable<Voxel> table = std::move(*tables.front());
   if (record) table.point_slots.reserve(cloud.size());
   for (std::size_t part = 1; part < parts.size(); ++part) {
-    merge_later(table, std::move(*tables[part]), limit);
+    merge_later(table, std::move(*tables[part]), limit, threads);
   }
   return table;
 }
