@@ -16,6 +16,8 @@
 #include <new>
 #include <vector>
 
+#include <pthread.h>
+
 #if defined(__has_feature)
 #define SGDICP_HAS_ADDRESS_SANITIZER __has_feature(address_sanitizer)  // clang
 #else
@@ -91,8 +93,18 @@ class BlockCache {
   BlockCache() = default;
   // Never destroyed: a vector freed during static destruction still finds it.
   static BlockCache& instance() {
-    static auto* const cache = new BlockCache;
+    static auto* const cache = make();
     return *cache;
+  }
+
+  // A fork() while another thread holds the mutex would leave it locked for good in the child
+  // (a Python multiprocessing worker, forked from a process registering on other threads):
+  // fork() waits for the mutex and both processes release it after, as glibc does for malloc.
+  static BlockCache* make() {
+    auto* const cache = new BlockCache;
+    pthread_atfork([] { instance().mutex_.lock(); }, [] { instance().mutex_.unlock(); },
+                   [] { instance().mutex_.unlock(); });
+    return cache;
   }
 
   std::mutex mutex_;

@@ -1,9 +1,13 @@
 // The block cache of the voxel passes' temporary arrays (src/recycling_allocator.hpp).
 #include "recycling_allocator.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <thread>
 #include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -64,6 +68,36 @@ TEST(RecyclingAllocator, TwoThreadsShareTheCache) {
   EXPECT_TRUE(intact[0]);
   EXPECT_TRUE(intact[1]);
   EXPECT_LE(BlockCache::kept_bytes(), BlockCache::kMaxKeptBytes);
+  BlockCache::release();
+}
+
+// fork() while another thread takes and returns blocks: every child can still allocate (without
+// the fork handlers a child forked while the other thread held the cache's mutex waits for it
+// forever; an alarm ends such a child, which fails the test).
+TEST(RecyclingAllocator, ForkedChildrenAllocateWhileAnotherThreadChurns) {
+  std::atomic<bool> stop{false};
+  std::thread churn([&] {
+    while (!stop.load(std::memory_order_relaxed)) {
+      RecycledVector<char> v(BlockCache::kMinBlockBytes);
+      (void)BlockCache::kept_bytes();
+    }
+  });
+  int hung = 0;
+  for (int i = 0; i < 40; ++i) {
+    const pid_t child = fork();
+    ASSERT_NE(child, -1);
+    if (child == 0) {
+      alarm(5);
+      { RecycledVector<char> v(2 * BlockCache::kMinBlockBytes); }
+      _exit(BlockCache::kept_bytes() <= BlockCache::kMaxKeptBytes ? 0 : 1);
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    hung += WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : 1;
+  }
+  stop = true;
+  churn.join();
+  EXPECT_EQ(hung, 0) << "children that hung or failed, of 40";
   BlockCache::release();
 }
 
