@@ -97,13 +97,13 @@ struct SgdSettings {
   bool check_degeneracy = true;
   /// Threads of one registration: where the library builds the index (reference_index_for:
   /// align() on clouds, the CLI, Python) the voxel grid's passes over the raw points (the size
-  /// search's counting and the thinning, in two fixed halves), the KD-tree build
-  /// (KdTreeSettings::num_threads) and, for a plane cost, the reference normals or covariances
-  /// of the grid, estimated there all at once instead of one by one in the run; the source's
-  /// thinning in align(); and with two or more, each mini-batch's nearest-neighbour queries in
-  /// two halves, one on a helper thread (the sums stay in batch order on the caller; the rest
-  /// of the SGD loop runs on one; docs/performance.md). 0 = every core. The result is identical
-  /// for any count.
+  /// search's counting, the moments), the grid's block surfaces alongside its KD-tree (or the
+  /// KD-tree build, KdTreeSettings::num_threads, and the normals or covariances estimated all
+  /// at once off the grid); the source's thinning in align(); and with two or more, each
+  /// mini-batch's nearest-neighbour queries and plane-cost terms in two halves, one on the
+  /// calling thread's helper (the sums stay in batch order on the caller; the rest of the SGD
+  /// loop runs on one), and the final statistics' queries (docs/performance.md, thirteenth
+  /// round). 0 = every core. The result is identical for any count.
   std::size_t num_threads = 1;
   /// Voxel-grid downsampling of both clouds before registering (preprocessing.hpp): the voxel
   /// side, metres; 0 = the grid downsample_to chooses.
