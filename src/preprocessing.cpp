@@ -491,8 +491,7 @@ VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, Point
 }
 
 // Where each of `keys` is in `slots` (kNone: not there), in two halves on two threads: the
-// look-ups only read the table. Half of a merge's time was these look-ups, each a cache miss
-// (docs/performance.md, fourteenth round).
+// look-ups only read the table (docs/performance.md, fourteenth round).
 detail::RecycledVector<std::size_t> look_up(const VoxelSlots& slots,
                                             const detail::RecycledVector<VoxelKey>& keys,
                                             std::size_t threads) {
