@@ -254,10 +254,8 @@ class VoxelSlots {
     rehash(std::bit_ceil(std::max<std::size_t>(64, expected + expected / 4)));
   }
 
-  [[nodiscard]] std::size_t size() const { return size_; }
-
-  // The slot of `key`, a new one (= size() before the call) if it was not there. Scans and
-  // depth images visit a voxel in runs: the table is probed only when the key changes.
+  // The slot of `key`, a new one (the count of keys before the call) if it was not there.
+  // Scans and depth images visit a voxel in runs: the table is probed only when the key changes.
   std::size_t slot(const VoxelKey& key) {
     if (size_ > 0 && key == last_key_) return last_slot_;
     last_key_ = key;
@@ -490,15 +488,13 @@ VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, Point
   return t;
 }
 
-// Where each of `keys` is in `slots` (kNone: not there), in two halves on two threads: the
-// look-ups only read the table (docs/performance.md, fourteenth round).
+// Where each of `keys` is in `slots` (kNone: not there), split over the threads as any pass
+// (resolve_threads): the look-ups only read the table (docs/performance.md, fourteenth round).
 detail::RecycledVector<std::size_t> look_up(const VoxelSlots& slots,
                                             const detail::RecycledVector<VoxelKey>& keys,
                                             std::size_t threads) {
-  constexpr std::size_t kMinKeysToSplit = 4096;
   detail::RecycledVector<std::size_t> found(keys.size());
-  const std::size_t used = keys.size() < kMinKeysToSplit ? 1 : resolve_thread_count(threads);
-  parallel_chunks(keys.size(), std::min<std::size_t>(used, 2),
+  parallel_chunks(keys.size(), resolve_threads(threads, keys.size()),
                   [&](std::size_t begin, std::size_t end) {
                     for (std::size_t s = begin; s < end; ++s) found[s] = slots.find(keys[s]);
                   });

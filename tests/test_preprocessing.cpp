@@ -422,7 +422,7 @@ TEST(VoxelDownsample, HalvesMergeToTheOnePassResultOnAnyThreadCount) {
   PointCloud cloud = random_box(rng, 100000, {-5, -3, -2}, {4, 3, 1});
   // A second half that adds voxels of its own (beyond x = 4) besides shared ones.
   for (std::size_t i = cloud.size() / 2; i < cloud.size(); i += 3) cloud.points[i].x() += 3.0F;
-  // ~20k voxels: the merge looks the second half's (> 4,096) up in two halves too.
+  // ~20k voxels: the merge looks the second half's up in parts on two threads too.
   const double voxel = 0.2;
   std::map<Key, std::size_t> slot;
   std::vector<std::pair<Eigen::Vector3d, int>> sums;
