@@ -24,7 +24,6 @@ namespace sgdicp {
 namespace {
 
 const Eigen::Vector3f kNoNormal = Eigen::Vector3f::Zero();
-const Eigen::Matrix3f kNoCovariance = Eigen::Matrix3f::Identity();
 
 // A pair found for a mini-batch, kept for trimming and for the costs that need more than the
 // two points.
@@ -151,6 +150,10 @@ class MiniBatchPairing {
                    std::vector<float>& distances) {
     const auto term_of = [&](const Pair& pair) {
       const Eigen::Vector3d r = scaling_.to_scaled(reference_.cloud().points[pair.reference_index]);
+      if (cost_ == CostType::point_to_plane) {
+        return cost.plane_term(pose.jacobian(pair.s), pair.moved - r,
+                               reference_surfaces_.normal(pair.reference_index).cast<double>());
+      }
       return cost.term(pose.jacobian(pair.s), pair.moved - r, information(pair, pose.rotation()));
     };
     if (split_queries_ && pairs_.size() >= kMinSplitBatch && surfaces_stored()) {
@@ -178,16 +181,13 @@ class MiniBatchPairing {
     return !needs_covariances(cost_) || (ref.has_covariances() && source_.has_covariances());
   }
 
-  // Omega of a pair (cost.hpp), with only what the cost reads looked up or estimated.
+  // Omega of a pair whose cost is not point-to-plane (that one is plane_term's): the identity,
+  // or for plane-to-plane from both points' covariances, looked up or estimated.
   Eigen::Matrix3d information(const Pair& pair, const Eigen::Matrix3d& rotation) {
-    const CostType type = cost_;
-    const bool plane_to_plane = needs_covariances(type);
-    return information_matrix(
-        type,
-        needs_reference_normals(type) ? reference_surfaces_.normal(pair.reference_index)
-                                      : kNoNormal,
-        plane_to_plane ? reference_surfaces_.covariance(pair.reference_index) : kNoCovariance,
-        plane_to_plane ? source_surfaces_.covariance(pair.source_index) : kNoCovariance, rotation);
+    if (!needs_covariances(cost_)) return Eigen::Matrix3d::Identity();
+    return information_matrix(cost_, kNoNormal,
+                              reference_surfaces_.covariance(pair.reference_index),
+                              source_surfaces_.covariance(pair.source_index), rotation);
   }
 
   const PointCloud& source_;

@@ -105,7 +105,7 @@ CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std:
     // information, where they span no plane).
     const Eigen::Vector3d n = surfaces.normal(nn->index).cast<double>();
     const Eigen::Vector3d r = p.scaling->to_scaled(p.reference->cloud().points[nn->index]);
-    cost.add(pose.jacobian(s), moved - r, n * n.transpose());
+    cost.add(cost.plane_term(pose.jacobian(s), moved - r, n));
   }
   return cost;
 }

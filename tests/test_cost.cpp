@@ -89,11 +89,46 @@ CostAccumulator accumulate(CostType cost, KernelType kernel, const PoseVector& t
   const EulerPoseJacobian pose(theta);
   CostAccumulator acc(kernel, 0.2, true);
   for (std::size_t i = 0; i < p.s.size(); ++i) {
+    const Eigen::Vector3d e = pose.transform(p.s[i]) - p.r[i];
+    if (cost == CostType::point_to_plane) {  // the registration's path for this cost
+      acc.add(acc.plane_term(pose.jacobian(p.s[i]), e, p.normals[i].cast<double>()));
+      continue;
+    }
     const Eigen::Matrix3d omega =
         information_matrix(cost, p.normals[i], p.ref_cov[i], p.src_cov[i], omega_rotation);
-    acc.add(pose.jacobian(p.s[i]), pose.transform(p.s[i]) - p.r[i], omega);
+    acc.add(pose.jacobian(p.s[i]), e, omega);
   }
   return acc;
+}
+
+TEST(Cost, PlaneTermIsTheGeneralTermWithOmegaNNT) {
+  std::mt19937_64 rng(33);
+  Pairs p = random_pairs(rng, 30);
+  p.normals[3].setZero();  // a point without a plane: no information
+  PoseVector theta;
+  for (int i = 0; i < 6; ++i) theta[i] = uniform(rng, -0.6, 0.6);
+  const EulerPoseJacobian pose(theta);
+  for (const KernelType kernel : kKernels) {
+    for (const bool with_hessian : {true, false}) {
+      const CostAccumulator acc(kernel, 0.2, with_hessian);
+      for (std::size_t i = 0; i < p.s.size(); ++i) {
+        const PoseJacobianMatrix j = pose.jacobian(p.s[i]);
+        const Eigen::Vector3d e = pose.transform(p.s[i]) - p.r[i];
+        const Eigen::Vector3d n = p.normals[i].cast<double>();
+        const auto fast = acc.plane_term(j, e, n);
+        const auto general = acc.term(j, e, n * n.transpose());
+        EXPECT_LT((fast.jte - general.jte).norm(), 1e-12) << to_string(kernel) << " pair " << i;
+        EXPECT_NEAR(fast.rho, general.rho, 1e-12) << to_string(kernel) << " pair " << i;
+        if (with_hessian) {
+          EXPECT_LT((fast.jtj - general.jtj).norm(), 1e-12) << to_string(kernel) << " pair " << i;
+        }
+      }
+      const auto none = acc.plane_term(pose.jacobian(p.s[3]), pose.transform(p.s[3]) - p.r[3],
+                                       Eigen::Vector3d::Zero());
+      EXPECT_EQ(none.jte, PoseVector::Zero());
+      EXPECT_EQ(none.rho, 0.0);
+    }
+  }
 }
 
 TEST(Cost, GradientMatchesFiniteDifferencesForEveryCostAndKernel) {

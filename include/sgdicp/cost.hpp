@@ -142,6 +142,23 @@ class CostAccumulator {
     return t;
   }
 
+  /// term() for Omega = n n^T (point-to-plane): of rank one, so J^T Omega e = (J^T n)(n^T e)
+  /// and J^T Omega J = (J^T n)(J^T n)^T, a third of the general products' operations (the
+  /// bunny's refinement: ~575 instructions a pair with the general term, measured with
+  /// callgrind). A zero normal (no plane) gives a zero term, as n n^T = 0 does.
+  [[nodiscard]] PairTerm plane_term(const PoseJacobianMatrix& j, const Eigen::Vector3d& e,
+                                    const Eigen::Vector3d& normal) const {
+    const PoseVector jtn = j.transpose() * normal;
+    const double r = normal.dot(e);
+    const double s = r * r;
+    const double w = kernel_weight(kernel_, s, kernel_scale_);
+    PairTerm t;
+    t.jte.noalias() = (w * r) * jtn;
+    if (with_hessian_) t.jtj.noalias() = (w * jtn) * jtn.transpose();
+    t.rho = kernel_rho(kernel_, s, kernel_scale_);
+    return t;
+  }
+
   void add(const PairTerm& t) {
     jte_ += t.jte;
     if (with_hessian_) jtj_ += t.jtj;
