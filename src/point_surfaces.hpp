@@ -28,8 +28,9 @@ struct PointSurface {
 [[nodiscard]] NeighborhoodSettings in_stored_frame(const NeighborhoodSettings& settings,
                                                    const PointCloud& cloud);
 
-/// The surface at index.cloud().points[i] from its min(k, size) nearest neighbours; `stored`
-/// from in_stored_frame, `neighbors` scratch space. A pure function of its inputs.
+/// The surface at index.cloud().points[i] from its flat_k nearest neighbours where they lie flat,
+/// else from its min(k, size) nearest (NeighborhoodSettings::flat_k); `stored` from
+/// in_stored_frame, `neighbors` scratch space. A pure function of its inputs.
 [[nodiscard]] PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
                                             const NeighborhoodSettings& stored,
                                             std::vector<Neighbor>& neighbors);

@@ -62,6 +62,17 @@ void check_neighborhood(const NeighborhoodSettings& settings) {
         "point itself), got " +
         std::to_string(settings.k));
   }
+  if (settings.flat_k != 0 && (settings.flat_k < kMinNeighbors || settings.flat_k > kMaxNeighbors)) {
+    throw InvalidSettingsError(
+        "flat neighbourhood size flat_k must be 0 (off) or in [3, 1000], got " +
+        std::to_string(settings.flat_k));
+  }
+  if (!(settings.flatness >= 0.0 && settings.flatness <= 1.0 / 3.0)) {
+    throw InvalidSettingsError(
+        "flatness (the largest surface variation of a flat neighbourhood) must be in [0, 1/3], "
+        "got " +
+        format_number(settings.flatness));
+  }
   if (!std::isfinite(settings.epsilon) || settings.epsilon <= 0.0 || settings.epsilon > 1.0) {
     throw InvalidSettingsError("covariance regularization epsilon must be in (0, 1], got " +
                                format_number(settings.epsilon));
@@ -121,15 +132,18 @@ void parallel_chunks(std::size_t n, std::size_t threads, const Body& body) {
 using detail::largest_coordinate;
 using detail::PointSurface;
 
+// `variation`, when given, receives the surface variation lambda_0 / (lambda_0 + lambda_1 +
+// lambda_2) of the covariance, or infinity for a degenerate neighbourhood.
 PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
                                  const Eigen::Matrix3d& covariance, std::size_t count,
-                                 const NeighborhoodSettings& settings);
+                                 const NeighborhoodSettings& settings,
+                                 double* variation = nullptr);
 
 // The neighbourhood summary of one point. Pure function of its inputs, hence identical
 // results for any thread count.
 PointSurface describe(const Eigen::Vector3f& point, const std::vector<Eigen::Vector3f>& points,
-                      const std::vector<Neighbor>& neighbors,
-                      const NeighborhoodSettings& settings) {
+                      const std::vector<Neighbor>& neighbors, const NeighborhoodSettings& settings,
+                      double* variation = nullptr) {
   const auto n = static_cast<double>(neighbors.size());
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const auto& nb : neighbors) mean += points[nb.index].cast<double>();
@@ -142,12 +156,12 @@ PointSurface describe(const Eigen::Vector3f& point, const std::vector<Eigen::Vec
     covariance.noalias() += d * d.transpose();
   }
   covariance /= n;
-  return describe_covariance(point, mean, covariance, neighbors.size(), settings);
+  return describe_covariance(point, mean, covariance, neighbors.size(), settings, variation);
 }
 
 PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
                                  const Eigen::Matrix3d& covariance, std::size_t count,
-                                 const NeighborhoodSettings& settings) {
+                                 const NeighborhoodSettings& settings, double* variation) {
   // The closed form costs a fraction of the iterative solver, but its smallest eigenvector
   // loses precision when the two smallest eigenvalues are close (a line, a point, a blob):
   // those neighbourhoods are solved again iteratively.
@@ -163,6 +177,10 @@ PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vect
                           !(eigenvalues[2] > floor) ||
                           !(eigenvalues[1] > std::max(floor, kCollinearRatio * eigenvalues[2]));
 
+  if (variation != nullptr) {
+    *variation = degenerate ? std::numeric_limits<double>::infinity()
+                            : eigenvalues[0] / eigenvalues.sum();
+  }
   PointSurface out;
   if (degenerate) {
     out.normal.setZero();
@@ -918,7 +936,14 @@ PointSurface estimate_surface(const ReferenceIndex& index, std::size_t i,
                               const NeighborhoodSettings& stored,
                               std::vector<Neighbor>& neighbors) {
   const std::vector<Eigen::Vector3f>& points = index.cloud().points;
-  index.k_nearest(points[i], std::min(stored.k, points.size()), neighbors);
+  const std::size_t k = std::min(stored.k, points.size());
+  if (stored.flat_k != 0 && stored.flat_k < k) {
+    index.k_nearest(points[i], stored.flat_k, neighbors);
+    double variation = 0.0;
+    const PointSurface flat = describe(points[i], points, neighbors, stored, &variation);
+    if (variation <= stored.flatness) return flat;
+  }
+  index.k_nearest(points[i], k, neighbors);
   return describe(points[i], points, neighbors, stored);
 }
 

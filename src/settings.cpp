@@ -283,6 +283,8 @@ constexpr ValueRange kTolerance{0.0, 0.01};
 constexpr ValueRange kTrim{0.01, 1.0};
 constexpr ValueRange kIterations{1.0, 1e9};
 constexpr ValueRange kNeighbors{3.0, 1000.0};
+constexpr ValueRange kFlatNeighbors{0.0, 1000.0};
+constexpr ValueRange kFlatness{0.0, 1.0 / 3.0};
 constexpr ValueRange kEvaluationPoints{0.0, 4294967295.0};
 constexpr ValueRange kThreads{0.0, static_cast<double>(kMaxThreads)};
 // A voxel side: 0 (no fixed grid) up to 1000 km; sizes too small for the coordinates are
@@ -314,6 +316,13 @@ constexpr std::string_view kThreadsHelp =
     "0 = every core; the result is the same for any count";
 constexpr std::string_view kNeighborsHelp =
     "Plane costs: neighbours per point (itself included) for normals and covariances";
+constexpr std::string_view kFlatNeighborsHelp =
+    "Plane costs: neighbours of a point whose nearest ones already lie flat (surface variation "
+    "at most --flatness): those alone give its normal and covariance, the others' come from "
+    "--neighbors; 0 = always --neighbors";
+constexpr std::string_view kFlatnessHelp =
+    "Plane costs: the largest surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2) of a "
+    "flat neighbourhood (see --flat-neighbors)";
 constexpr std::string_view kEvaluationHelp =
     "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all";
 constexpr std::string_view kDegeneracyHelp =
@@ -520,6 +529,10 @@ std::vector<Setting<S>> result_and_pair_settings() {
       setting<S, &S::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
       setting<S, &S::neighborhood, &N::k>(
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
+      setting<S, &S::neighborhood, &N::flat_k>(
+          {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
+      setting<S, &S::neighborhood, &N::flatness>(
+          {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
       setting<S, &S::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
@@ -628,6 +641,10 @@ std::vector<Setting<B>> make_batch_table() {
       setting<B, &B::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
       setting<B, &B::neighborhood, &N::k>(
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
+      setting<B, &B::neighborhood, &N::flat_k>(
+          {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
+      setting<B, &B::neighborhood, &N::flatness>(
+          {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
       setting<B, &B::check_degeneracy>(
           {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),

@@ -175,6 +175,88 @@ TEST(Covariances, RawEqualBruteForceOverBruteForceNeighbours) {
   }
 }
 
+// The surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2) of a covariance.
+double surface_variation(const Eigen::Matrix3d& covariance) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(covariance);
+  return es.eigenvalues()[0] / es.eigenvalues().sum();
+}
+
+TEST(FlatNeighbourhoods, FlatKWhereThoseLieFlatElseKAgainstBruteForce) {
+  // A smooth sparse ellipsoid (flat neighbourhoods of 10) beside a rough slab (not flat).
+  std::mt19937_64 rng(41);
+  PointCloud cloud;
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3d u = random_unit(rng);
+    cloud.points.push_back((u.cwiseProduct(Eigen::Vector3d(0.8, 0.4, 0.2))).cast<float>());
+  }
+  const PointCloud slab = random_box(rng, 300, {3, 0, 0}, {4, 1, 0.3});
+  cloud.points.insert(cloud.points.end(), slab.points.begin(), slab.points.end());
+  NeighborhoodSettings s = raw_settings(20);
+  s.flat_k = 10;
+  s.flatness = 0.05;
+  sgdicp::estimate_covariances(cloud, s);
+  std::size_t flat = 0;
+  std::size_t rough = 0;
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!brute_neighbors(cloud, i, s.flat_k, idx)) continue;
+    const Eigen::Matrix3d few = brute_covariance(cloud, idx);
+    const bool is_flat = surface_variation(few) <= s.flatness;
+    if (!is_flat && !brute_neighbors(cloud, i, s.k, idx)) continue;
+    (is_flat ? flat : rough) += 1;
+    const Eigen::Matrix3d expected = is_flat ? few : brute_covariance(cloud, idx);
+    ASSERT_LT((cloud.covariances[i].cast<double>() - expected).cwiseAbs().maxCoeff(), 1e-6)
+        << "point " << i << (is_flat ? " (flat)" : " (rough)");
+  }
+  // Both rules were exercised.
+  EXPECT_GT(flat, 200U);
+  EXPECT_GT(rough, 200U);
+  // flat_k = 0 is the plain k-nearest estimate.
+  PointCloud plain = cloud;
+  s.flat_k = 0;
+  sgdicp::estimate_covariances(plain, s);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (brute_neighbors(plain, i, s.k, idx)) {
+      ASSERT_LT((plain.covariances[i].cast<double>() - brute_covariance(plain, idx))
+                    .cwiseAbs()
+                    .maxCoeff(),
+                1e-6);
+    }
+    differ += plain.covariances[i] != cloud.covariances[i] ? 1 : 0;
+  }
+  EXPECT_GT(differ, 200U);
+}
+
+TEST(FlatNeighbourhoods, KeepTheShapeOfASparseSmallObject) {
+  // 400 points on an ellipsoid (curvature varying 16x over it), as sparse as the PCL bunny:
+  // k = 20 neighbourhoods reach across its bends, flat ones of 10 do not.
+  std::mt19937_64 rng(42);
+  const Eigen::Vector3d axes(0.08, 0.04, 0.02);
+  PointCloud cloud;
+  std::vector<Eigen::Vector3d> truth;
+  for (int i = 0; i < 400; ++i) {
+    const Eigen::Vector3d p = random_unit(rng).cwiseProduct(axes);
+    cloud.points.push_back(p.cast<float>());
+    truth.push_back(p.cwiseQuotient(axes.cwiseProduct(axes)).normalized());
+  }
+  const auto mean_error_deg = [&](std::size_t flat_k) {
+    PointCloud c = cloud;
+    NeighborhoodSettings s;
+    s.flat_k = flat_k;
+    sgdicp::estimate_normals(c, s);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      const double cosine = std::min(1.0, std::abs(c.normals[i].cast<double>().dot(truth[i])));
+      sum += std::acos(cosine) * 180.0 / M_PI;
+    }
+    return sum / static_cast<double>(c.size());
+  };
+  const double plain = mean_error_deg(0);
+  const double adaptive = mean_error_deg(10);
+  EXPECT_LT(adaptive, 0.9 * plain) << "flat_k = 10: " << adaptive << " deg, k = 20: " << plain;
+}
+
 TEST(Covariances, RegularizedArePlaneModelWithRawEigenvectors) {
   std::mt19937_64 rng(14);
   PointCloud raw = noisy_plane(rng, 1500, {1, 2, 3}, random_unit(rng), 0.01);
@@ -354,6 +436,16 @@ TEST(Settings, BadSettingsAndInputThrowAndLeaveTheCloudUnchanged) {
   s = {};
   s.viewpoint.x() = std::nanf("");
   expect_settings_error(s);
+  s = {};
+  for (const std::size_t flat_k : {1UL, 2UL, 1001UL}) {
+    s.flat_k = flat_k;
+    expect_settings_error(s);
+  }
+  s = {};
+  for (const double flatness : {-1e-9, 0.34, std::nan(""), HUGE_VAL}) {
+    s.flatness = flatness;
+    expect_settings_error(s);
+  }
   // Edges of the valid ranges are accepted.
   for (const std::size_t k : {3UL, 1000UL}) {
     PointCloud c = cloud;
@@ -361,6 +453,8 @@ TEST(Settings, BadSettingsAndInputThrowAndLeaveTheCloudUnchanged) {
     s.k = k;
     s.num_threads = 1024;
     s.epsilon = 1.0;
+    s.flat_k = k;
+    s.flatness = 1.0 / 3.0;
     EXPECT_NO_THROW(sgdicp::estimate_covariances(c, s));
   }
 

@@ -18,6 +18,17 @@ namespace sgdicp {
 struct NeighborhoodSettings {
   /// Neighbours per point, including the point itself. In [3, 1000].
   std::size_t k = 20;
+  /// Neighbours of a neighbourhood that is already flat, the point included: where the
+  /// flat_k nearest points have a surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2)
+  /// of at most `flatness` (and are not degenerate), they alone give the surface; elsewhere the
+  /// k nearest do. More neighbours only average the noise of a rough surface, but on a smooth
+  /// one they add its curvature: a sparse scan of a small object loses its shape in k = 20
+  /// (docs/preprocessing.md, *Flat neighbourhoods*). 0 = always k (plain k-nearest
+  /// neighbourhoods); otherwise in [3, k) to have an effect, at most 1000.
+  std::size_t flat_k = 0;
+  /// The largest surface variation (0 for a plane, 1/3 for an isotropic blob) of a flat_k
+  /// neighbourhood taken as flat. In [0, 1/3].
+  double flatness = 0.05;
   /// Worker threads; 0 = std::thread::hardware_concurrency(). At most 1024. Results are
   /// bit-identical for any thread count.
   std::size_t num_threads = 0;
@@ -30,8 +41,8 @@ struct NeighborhoodSettings {
   /// Normals are flipped to face this point (metres): n.dot(viewpoint - p) >= 0.
   Eigen::Vector3f viewpoint = Eigen::Vector3f::Zero();
 
-  /// Throws InvalidSettingsError for k, num_threads or epsilon out of range or a non-finite
-  /// viewpoint. SgdSettings::validate() and BatchSettings::validate() call it.
+  /// Throws InvalidSettingsError for k, flat_k, flatness, num_threads or epsilon out of range
+  /// or a non-finite viewpoint. SgdSettings::validate() and BatchSettings::validate() call it.
   void validate() const;
 
   bool operator==(const NeighborhoodSettings&) const = default;
@@ -39,6 +50,9 @@ struct NeighborhoodSettings {
 
 /// Fills cloud.covariances and cloud.normals (one per point) from the k nearest neighbours of
 /// each point (itself included), found in a KD-tree built here over cloud.points.
+///
+/// With settings.flat_k, a point whose flat_k nearest neighbours lie flat (surface variation at
+/// most settings.flatness) is summarised by those alone, any other by its k nearest.
 ///
 /// Raw covariance: (1/n) sum (q - mean)(q - mean)^T over the n = min(k, size) neighbours, in m^2
 /// (the 1/n of PCL and Open3D). Normal: unit eigenvector of its smallest eigenvalue, facing the

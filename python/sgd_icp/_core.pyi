@@ -173,12 +173,14 @@ class OptimizerSettings:
     type: OptimizerType
     """Step rule of eq. 3 (sgd: fixed step; gauss-newton: A = inverse of the averaged mini-batch
     Gauss-Newton matrix); also sets the learning rate to the rule's own unless one is given
-    (OptimizerType or one of its names). Keyword optimizer=. Default OptimizerType.adam.
+    (OptimizerType or one of its names). Keyword optimizer=. Default OptimizerType.adam. (That is
+    Settings()'s; a OptimizerSettings() of its own has OptimizerType.sgd.)
     """
     learning_rate: float
     """Step size alpha (adaptive rules: a length per step; sgd, momentum: a gradient multiplier;
     gauss-newton: a fraction of the Newton step), scaled units in [1e-06, 10000]. Keyword
-    learning_rate=. Default 0.01.
+    learning_rate=. Default 0.01. (That is Settings()'s; a OptimizerSettings() of its own has
+    2.0.)
     """
     momentum: float
     """Momentum: velocity decay, in [0, 1). Keyword momentum=. Default 0.9."""
@@ -339,6 +341,16 @@ class NeighborhoodSettings:
     k: int
     """Plane costs: neighbours per point (itself included) for normals and covariances, in [3,
     1000]. Keyword neighbors=. Default 20.
+    """
+    flat_k: int
+    """Plane costs: neighbours of a point whose nearest ones already lie flat (surface variation at
+    most --flatness): those alone give its normal and covariance, the others' come from
+    --neighbors; 0 = always --neighbors, in [0, 1000]. Keyword flat_neighbors=. Default 10. (That
+    is Settings()'s; a NeighborhoodSettings() of its own has 0.)
+    """
+    flatness: float
+    """Plane costs: the largest surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2) of a
+    flat neighbourhood (see --flat-neighbors), in [0, 0.333333]. Keyword flatness=. Default 0.05.
     """
     num_threads: int
     """Worker threads of the estimation; 0 = all cores (the results are the same for any count).
@@ -802,7 +814,7 @@ class ReferenceIndex:
         same tree for any count). cost: the cost the index will serve, default 'point-to-point';
         'point-to-plane' estimates the reference normals (unless given), 'plane-to-plane' the
         covariances, with `neighborhood` (NeighborhoodSettings, default None =
-        NeighborhoodSettings()). The GIL is released during the build. The index never changes
+        Settings().neighborhood). The GIL is released during the build. The index never changes
         afterwards: the SGD methods estimate the normals or covariances they use during the run;
         a batch method whose cost needs them raises InvalidInputError when the index lacks them.
         """
@@ -1120,8 +1132,9 @@ def register(
         rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        check_degeneracy (True), threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]),
-        downsample_to (0, [0, 4294967295]), robust_scaling (True), record_trace (False).
+        flat_neighbors (0, [0, 1000]), flatness (0.05, [0, 0.333333]), check_degeneracy (True),
+        threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]), downsample_to (0, [0, 4294967295]),
+        robust_scaling (True), record_trace (False).
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
         batch_size (160, [1, 10000000]), cap_batch_to_source (True),
@@ -1136,13 +1149,14 @@ def register(
         scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_plane), coarse_cost (CostType.point_to_point),
         kernel (KernelType.none), kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]),
-        neighbors (20, [3, 1000]), check_degeneracy (True), threads (1, [0, 1024]),
-        voxel_size (0.0, [0, 1000000]), downsample_to (20000, [0, 4294967295]),
-        robust_scaling (True), record_trace (False), uncertainty (UncertaintyType.none),
-        uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
-        thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), particles (32, [1, 10000]),
-        svgd_iterations (50, [1, 1000000]), svgd_step (0.05, [0.0001, 10]),
-        svgd_spread (3.0, [0.001, 1000000000]), temper (True), block_size (Distance.scaled(0.1)).
+        neighbors (20, [3, 1000]), flat_neighbors (10, [0, 1000]), flatness (0.05, [0, 0.333333]),
+        check_degeneracy (True), threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]),
+        downsample_to (20000, [0, 4294967295]), robust_scaling (True), record_trace (False),
+        uncertainty (UncertaintyType.none), uncertainty_samples (200, [2, 1000000]),
+        burn_in (50, [0, 10000000]), thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]),
+        particles (32, [1, 10000]), svgd_iterations (50, [1, 1000000]),
+        svgd_step (0.05, [0.0001, 10]), svgd_spread (3.0, [0.001, 1000000000]), temper (True),
+        block_size (Distance.scaled(0.1)).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in

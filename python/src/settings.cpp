@@ -540,12 +540,14 @@ void bind_neighborhood(py::module_& m) {
       "(Settings.neighborhood).");
   neighborhood.def(py::init<>());
   def_count(neighborhood, "k", &NeighborhoodSettings::k, "");
+  def_count(neighborhood, "flat_k", &NeighborhoodSettings::flat_k, "");
   def_count(neighborhood, "num_threads", &NeighborhoodSettings::num_threads,
             "Worker threads of the estimation; 0 = all cores (the results are the same for any "
             "count). Default 0.");
   def_flag(neighborhood, "regularize", &NeighborhoodSettings::regularize,
            "Replace each covariance by the GICP plane model (unitless). Default True.");
   neighborhood
+      .def_readwrite("flatness", &NeighborhoodSettings::flatness, "")
       .def_readwrite("epsilon", &NeighborhoodSettings::epsilon,
                      "Variance along the normal in the plane model, relative to 1 in the plane, "
                      "in (0, 1]. Default 1e-3.")
@@ -778,9 +780,16 @@ void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, c
     const std::string attribute =
         field.substr(field.find('.') == std::string::npos ? 0 : field.find('.') + 1);
     const py::object old = cls.attr("__dict__")[attribute.c_str()];
-    py::setattr(
-        cls, attribute.c_str(),
-        property(old.attr("fget"), old.attr("fset"), old.attr("fdel"), attribute_doc(s, defaults)));
+    std::string doc = attribute_doc(s, defaults);
+    // A part of Settings documents Settings' value; say so where its own default differs.
+    if (cls_name != top) {
+      const std::string own = python_literal(cls().attr(attribute.c_str()));
+      if (doc.substr(doc.rfind("Default ") + 8) != own + ".") {
+        doc += " (That is Settings()'s; a " + cls_name + "() of its own has " + own + ".)";
+      }
+    }
+    py::setattr(cls, attribute.c_str(),
+                property(old.attr("fget"), old.attr("fset"), old.attr("fdel"), doc));
   }
 }
 
