@@ -62,7 +62,8 @@ void check_neighborhood(const NeighborhoodSettings& settings) {
         "point itself), got " +
         std::to_string(settings.k));
   }
-  if (settings.flat_k != 0 && (settings.flat_k < kMinNeighbors || settings.flat_k > kMaxNeighbors)) {
+  if (settings.flat_k != 0 &&
+      (settings.flat_k < kMinNeighbors || settings.flat_k > kMaxNeighbors)) {
     throw InvalidSettingsError(
         "flat neighbourhood size flat_k must be 0 (off) or in [3, 1000], got " +
         std::to_string(settings.flat_k));
@@ -136,8 +137,7 @@ using detail::PointSurface;
 // lambda_2) of the covariance, or infinity for a degenerate neighbourhood.
 PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
                                  const Eigen::Matrix3d& covariance, std::size_t count,
-                                 const NeighborhoodSettings& settings,
-                                 double* variation = nullptr);
+                                 const NeighborhoodSettings& settings, double* variation = nullptr);
 
 // The neighbourhood summary of one point. Pure function of its inputs, hence identical
 // results for any thread count.
@@ -178,8 +178,8 @@ PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vect
                           !(eigenvalues[1] > std::max(floor, kCollinearRatio * eigenvalues[2]));
 
   if (variation != nullptr) {
-    *variation = degenerate ? std::numeric_limits<double>::infinity()
-                            : eigenvalues[0] / eigenvalues.sum();
+    *variation =
+        degenerate ? std::numeric_limits<double>::infinity() : eigenvalues[0] / eigenvalues.sum();
   }
   PointSurface out;
   if (degenerate) {

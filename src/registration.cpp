@@ -249,7 +249,7 @@ class SgdRun {
       schedule_.end_window();
       if (test == WindowTest::moving) continue;
       ++result.stages;
-      if (schedule_.final_stage()) {
+      if (schedule_.final_stage() || schedule_.settled()) {
         detail::set_stop(result, StopReason::converged, "converged");
         return settings_.average_iterates ? monitor_.window_mean() : theta;
       }

@@ -492,6 +492,13 @@ std::vector<Setting<S>> stop_settings() {
            "Refinement: the refinement stages take Gauss-Newton steps (the gauss-newton rule at "
            "its own step, times the stage's multiplier) whatever the coarse stage's rule, "
            "except with a robust kernel or trimming"}),
+      setting<S, &S::refinement, &R::settle_tolerance>(
+          {"settle-tolerance",
+           "refinement.settle_tolerance",
+           {0.0, 0.99},
+           "",
+           "Refinement: a refinement stage ends the run when the d_max it would hand on is "
+           "within this fraction of its own (the pairs have settled); 0 = run every stage"}),
   };
 }
 

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "sgdicp/convergence.hpp"
+#include "sgdicp/refinement.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {
@@ -283,6 +284,51 @@ TEST(ConvergenceMonitor, WindowLengthIsASetting) {
   ConvergenceMonitor monitor(s);
   EXPECT_TRUE(tiny_window(monitor, 1e-9, kPairs, 8));
   EXPECT_FALSE(tiny_window(monitor, 1e-9, kPairs, 7));  // 7 of 8: not yet tested
+}
+
+// ---- RefinementSchedule
+
+// One window of pair distances, all `d`, then the window's end.
+void window_of(RefinementSchedule& schedule, float d) {
+  schedule.pair_distances().assign(100, d);
+  schedule.end_window();
+}
+
+TEST(RefinementSchedule, ShrinksDMaxToThreeMediansAndHalvesTheStep) {
+  RefinementSchedule schedule(RefinementSettings{}, 0.5, 1e-4, 160);
+  window_of(schedule, 0.01F);
+  schedule.refine();
+  EXPECT_EQ(schedule.stage(), 1U);
+  EXPECT_NEAR(schedule.max_distance(), 0.03, 1e-8);
+  EXPECT_DOUBLE_EQ(schedule.step_scale(), 0.5);
+  window_of(schedule, 0.02F);  // never widened by a refinement
+  schedule.refine();
+  EXPECT_NEAR(schedule.max_distance(), 0.03, 1e-8);
+}
+
+TEST(RefinementSchedule, ARefinementStageThatLeavesDMaxWhereItWasHasSettled) {
+  RefinementSchedule schedule(RefinementSettings{}, 0.5, 1e-4, 160);
+  window_of(schedule, 0.001F);       // d_max would fall from 0.5 to 0.003
+  EXPECT_FALSE(schedule.settled());  // the coarse stage never settles the run
+  schedule.refine();
+  window_of(schedule, 0.00097F);  // 0.00291: 3 % below 0.003
+  EXPECT_TRUE(schedule.settled());
+  window_of(schedule, 0.00094F);  // 0.00282: 6 % below
+  EXPECT_FALSE(schedule.settled());
+  // A stage whose d_max had to widen (a mini-batch without pairs) lost its pairs: not settled.
+  schedule.end_batch(0);
+  window_of(schedule, 0.002F);  // 0.006 = the widened d_max
+  EXPECT_FALSE(schedule.settled());
+  schedule.refine();
+  window_of(schedule, 0.002F);
+  EXPECT_TRUE(schedule.settled());
+  RefinementSettings every_stage;
+  every_stage.settle_tolerance = 0.0;
+  RefinementSchedule off(every_stage, 0.5, 1e-4, 160);
+  window_of(off, 0.001F);
+  off.refine();
+  window_of(off, 0.001F);
+  EXPECT_FALSE(off.settled());
 }
 
 }  // namespace

@@ -4,7 +4,8 @@
 // scene, so its optimum is biased by every non-overlapping point; each time a stage tests
 // stationary (ConvergenceMonitor) the schedule shrinks d_max to a multiple of the median
 // correspondence distance of the stage's last window and multiplies the step size by a decay.
-// When the last stage is stationary the run has converged.
+// When the last stage is stationary, or a refinement stage leaves d_max where it was, the run
+// has converged.
 #include <algorithm>
 #include <cstddef>
 #include <vector>
@@ -31,6 +32,12 @@ struct RefinementSettings {
   /// wide (Adam). Not with a robust kernel or trimming (partial overlap), where the full Newton
   /// steps follow the outliers' pull: the refinement then keeps the coarse stage's rule.
   bool gauss_newton = true;
+  /// A refinement stage also ends the run when the d_max it would hand on is within this
+  /// fraction of its own: the pairs have settled, and one more stage would only repeat them at
+  /// half the step. On nearly aligned dense frames that is the last stage's window of 20
+  /// mini-batches saved (PCL Kinect frames and 7-Scenes 80 -> 60, rotation as precise;
+  /// docs/performance.md, fifteenth round). 0 = always run every stage. In [0, 0.99].
+  double settle_tolerance = 0.05;
   bool operator==(const RefinementSettings&) const = default;
 };
 
@@ -65,6 +72,7 @@ class RefinementSchedule {
   void end_batch(std::size_t pairs) {
     if (pairs == 0 && max_distance_ < initial_max_distance_) {
       max_distance_ = std::min(2.0 * max_distance_, initial_max_distance_);
+      widened_ = true;
     }
   }
 
@@ -74,15 +82,29 @@ class RefinementSchedule {
     current_window_.clear();
   }
 
+  /// Whether the stage just found stationary, a refinement stage whose d_max never had to widen
+  /// (a stage that lost its pairs has not settled), would hand on a d_max within
+  /// settle_tolerance of its own (RefinementSettings::settle_tolerance).
+  [[nodiscard]] bool settled() {
+    if (stage_ == 0 || widened_ || settings_.settle_tolerance <= 0.0) return false;
+    return next_max_distance() >= (1.0 - settings_.settle_tolerance) * max_distance_;
+  }
+
   /// The stage was stationary: tighter correspondences, smaller steps.
   void refine() {
     ++stage_;
     step_scale_ *= settings_.step_decay;
-    const double robust = settings_.distance_factor * median(last_window_);
-    max_distance_ = std::clamp(robust, min_max_distance_, max_distance_);
+    max_distance_ = next_max_distance();
+    widened_ = false;
   }
 
  private:
+  // distance_factor x the median pair distance of the last window, within [min, current].
+  double next_max_distance() {
+    const double robust = settings_.distance_factor * median(last_window_);
+    return std::clamp(robust, min_max_distance_, max_distance_);
+  }
+
   static double median(std::vector<float>& values) {
     if (values.empty()) return 0.0;
     const auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
@@ -96,6 +118,7 @@ class RefinementSchedule {
   double max_distance_;
   double step_scale_ = 1.0;
   std::size_t stage_ = 0;
+  bool widened_ = false;  // end_batch widened d_max in this stage
   std::vector<float> current_window_;
   std::vector<float> last_window_;
 };

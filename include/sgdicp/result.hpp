@@ -14,7 +14,8 @@
 namespace sgdicp {
 
 enum class StopReason {
-  converged,           ///< the convergence test passed (after all refinement stages)
+  converged,  ///< the convergence test passed (in the last refinement stage, or in one whose pairs
+              ///< had settled)
   max_iterations,      ///< the iteration limit was reached first
   no_correspondences,  ///< a whole window of mini-batches found no pair within d_max
   diverged,            ///< the pose became non-finite or left the scaled space far behind
@@ -110,7 +111,9 @@ struct RegistrationResult {
 template <typename F>
 void for_each_result_field(F&& f) {
   using R = RegistrationResult;
-  f("converged", &R::converged, "True if the convergence test passed after all refinement stages.");
+  f("converged", &R::converged,
+    "True if the convergence test passed in the last refinement stage (or in one whose pairs had "
+    "settled, RefinementSettings.settle_tolerance).");
   f("stop_reason", &R::stop_reason,
     "'converged', 'max_iterations', 'no_correspondences', 'diverged' or 'no_descent'.");
   f("message", &R::message, "One line on why it stopped.");

@@ -272,6 +272,11 @@ class RefinementSettings:
     step, times the stage's multiplier) whatever the coarse stage's rule, except with a robust
     kernel or trimming. Keyword refine_gauss_newton=. Default True.
     """
+    settle_tolerance: float
+    """Refinement: a refinement stage ends the run when the d_max it would hand on is within this
+    fraction of its own (the pairs have settled); 0 = run every stage, in [0, 0.99]. Keyword
+    settle_tolerance=. Default 0.05.
+    """
 
     def __init__(self) -> None: ...
     def __eq__(self, other: object) -> bool: ...
@@ -918,7 +923,9 @@ class RegistrationResult:
         """
     @property
     def converged(self) -> bool:
-        """True if the convergence test passed after all refinement stages."""
+        """True if the convergence test passed in the last refinement stage (or in one whose pairs
+        had settled, RefinementSettings.settle_tolerance).
+        """
     @property
     def stop_reason(self) -> str:
         """'converged', 'max_iterations', 'no_correspondences', 'diverged' or 'no_descent'."""
@@ -1145,12 +1152,13 @@ def register(
         window (20, [8, 100000]), chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
         translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]),
         refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
-        min_distance (Distance.scaled(0.0001)), refine_gauss_newton (True), average (True),
-        scaling_origin (ScalingOrigin.center), evaluation_points (2000, [0, 4294967295]),
-        cost (CostType.point_to_plane), coarse_cost (CostType.point_to_point),
-        kernel (KernelType.none), kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]),
-        neighbors (20, [3, 1000]), flat_neighbors (10, [0, 1000]), flatness (0.05, [0, 0.333333]),
-        check_degeneracy (True), threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]),
+        min_distance (Distance.scaled(0.0001)), refine_gauss_newton (True),
+        settle_tolerance (0.05, [0, 0.99]), average (True), scaling_origin (ScalingOrigin.center),
+        evaluation_points (2000, [0, 4294967295]), cost (CostType.point_to_plane),
+        coarse_cost (CostType.point_to_point), kernel (KernelType.none),
+        kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
+        flat_neighbors (10, [0, 1000]), flatness (0.05, [0, 0.333333]), check_degeneracy (True),
+        threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]),
         downsample_to (20000, [0, 4294967295]), robust_scaling (True), record_trace (False),
         uncertainty (UncertaintyType.none), uncertainty_samples (200, [2, 1000000]),
         burn_in (50, [0, 10000000]), thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]),

@@ -530,6 +530,7 @@ void bind_convergence(py::module_& m) {
       .def_readwrite("distance_factor", &RefinementSettings::distance_factor, "");
   def_flag(refinement, "gauss_newton", &RefinementSettings::gauss_newton, "");
   def_distance(refinement, "min_distance", &RefinementSettings::min_distance, "");
+  refinement.def_readwrite("settle_tolerance", &RefinementSettings::settle_tolerance, "");
   def_value_methods(refinement);
 }
 
@@ -546,8 +547,7 @@ void bind_neighborhood(py::module_& m) {
             "count). Default 0.");
   def_flag(neighborhood, "regularize", &NeighborhoodSettings::regularize,
            "Replace each covariance by the GICP plane model (unitless). Default True.");
-  neighborhood
-      .def_readwrite("flatness", &NeighborhoodSettings::flatness, "")
+  neighborhood.def_readwrite("flatness", &NeighborhoodSettings::flatness, "")
       .def_readwrite("epsilon", &NeighborhoodSettings::epsilon,
                      "Variance along the normal in the plane model, relative to 1 in the plane, "
                      "in (0, 1]. Default 1e-3.")
