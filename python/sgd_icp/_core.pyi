@@ -819,9 +819,11 @@ class ReferenceIndex:
         same tree for any count). cost: the cost the index will serve, default 'point-to-point';
         'point-to-plane' estimates the reference normals (unless given), 'plane-to-plane' the
         covariances, with `neighborhood` (NeighborhoodSettings, default None =
-        Settings().neighborhood). The GIL is released during the build. The index never changes
-        afterwards: the SGD methods estimate the normals or covariances they use during the run;
-        a batch method whose cost needs them raises InvalidInputError when the index lacks them.
+        NeighborhoodSettings(): plain k-nearest neighbourhoods, as the batch methods' defaults;
+        pass Settings().neighborhood to give the SGD methods the normals they would estimate
+        themselves). The GIL is released during the build. The index never changes afterwards:
+        the SGD methods estimate the normals or covariances they use during the run; a batch
+        method whose cost needs them raises InvalidInputError when the index lacks them.
         """
 
     @staticmethod

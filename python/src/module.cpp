@@ -476,7 +476,7 @@ void bind_reference_index(py::module_& m) {
                        const py::handle& neighborhood, const py::handle& threads) {
              const CostType c = cost_from_object(cost, "cost");
              const NeighborhoodSettings n = neighborhood.is_none()
-                                                ? SgdSettings{}.neighborhood
+                                                ? NeighborhoodSettings{}
                                                 : py::cast<NeighborhoodSettings>(neighborhood);
              auto converted =
                  cloud_from_array(points, "reference", NonFinite::drop, false, normals);
@@ -500,7 +500,9 @@ void bind_reference_index(py::module_& m) {
            "default 1, 0 = every core (the same tree for any count). "
            "cost: the cost the index will serve, default 'point-to-point'; 'point-to-plane' "
            "estimates the reference normals (unless given), 'plane-to-plane' the covariances, with "
-           "`neighborhood` (NeighborhoodSettings, default None = Settings().neighborhood). The GIL "
+           "`neighborhood` (NeighborhoodSettings, default None = NeighborhoodSettings(): plain k-nearest "
+           "neighbourhoods, as the batch methods' defaults; pass Settings().neighborhood to give "
+           "the SGD methods the normals they would estimate themselves). The GIL "
            "is released during the build. The index never changes afterwards: the SGD methods "
            "estimate the normals or covariances they use during the run; a batch method whose "
            "cost needs them raises InvalidInputError when the index lacks them.")

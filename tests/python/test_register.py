@@ -178,7 +178,8 @@ def test_plane_costs_recover_the_transform(scene, cost):
     source, reference = source[::2], reference[::2]
     # Every point (downsample_to=0): the index holds the clouds as given, as the array does.
     with_array = sgd_icp.register(source, reference, cost=cost, kernel="huber", downsample_to=0)
-    index = sgd_icp.ReferenceIndex(reference, cost=cost)
+    # Prepared with the SGD methods' neighbourhoods (flat ones of 10), as they would estimate.
+    index = sgd_icp.ReferenceIndex(reference, cost=cost, neighborhood=sgd_icp.Settings().neighborhood)
     assert index.has_normals and (index.has_covariances or cost == "point-to-plane")
     with_index = sgd_icp.register(source, index, cost=cost, kernel="huber", downsample_to=0)
     assert np.array_equal(with_array.T_reference_source, with_index.T_reference_source)
@@ -300,7 +301,8 @@ def test_result_has_every_field(scene):
     np.testing.assert_array_equal(r.T_reference_source[3], [0, 0, 0, 1])
     assert r.converged is True and r.stop_reason == "converged" and r.message
     assert r.iterations > 0 and r.points_processed == r.iterations * 160
-    assert r.stages == 4  # the coarse phase and 3 refinement stages
+    # The coarse phase and 3 refinement stages, or fewer once the pairs settle (settle_tolerance).
+    assert 2 <= r.stages <= 4
     assert r.evaluated_points == 2000 and 0 < r.inliers <= r.evaluated_points
     assert r.inlier_ratio == pytest.approx(r.inliers / r.evaluated_points)
     assert 0 < r.inlier_rmse_m < 0.03
