@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 #include <vector>
@@ -248,7 +249,7 @@ TEST(FlatNeighbourhoods, KeepTheShapeOfASparseSmallObject) {
     double sum = 0.0;
     for (std::size_t i = 0; i < c.size(); ++i) {
       const double cosine = std::min(1.0, std::abs(c.normals[i].cast<double>().dot(truth[i])));
-      sum += std::acos(cosine) * 180.0 / M_PI;
+      sum += std::acos(cosine) * 180.0 / std::numbers::pi;
     }
     return sum / static_cast<double>(c.size());
   };
