@@ -70,6 +70,41 @@ class NearestWithin {
   bool found_ = false;
 };
 
+// The nearest and second-nearest within the rejection distance. The nearest is NearestWithin's:
+// the tree is walked in the same order, so the first point at the least distance wins in both.
+class TwoNearestWithin {
+ public:
+  using DistanceType = float;
+  using IndexType = std::uint32_t;
+  using CountType = std::size_t;
+
+  explicit TwoNearestWithin(float max_squared_distance)
+      : best_(max_squared_distance), second_(max_squared_distance) {}
+  [[nodiscard]] std::size_t size() const { return found_ ? 1 : 0; }
+  [[nodiscard]] bool full() const { return found_; }
+  bool addPoint(float dist, std::uint32_t index) {
+    if (dist < best_) {
+      second_ = best_;
+      best_ = dist;
+      index_ = index;
+      found_ = true;
+    } else if (dist < second_) {
+      second_ = dist;
+    }
+    return true;
+  }
+  [[nodiscard]] float worstDist() const { return second_; }
+  [[nodiscard]] float best() const { return best_; }
+  [[nodiscard]] bool found() const { return found_; }
+  [[nodiscard]] std::uint32_t index() const { return index_; }
+
+ private:
+  float best_;
+  float second_;
+  std::uint32_t index_ = 0;
+  bool found_ = false;
+};
+
 // nanoflann 1.4 builds its tree on one thread. Below its top splits the subtrees cover disjoint
 // ranges of the index array, so they can be built at once, each on a thread of its own, into the
 // node pool of a helper tree (nanoflann's pool is not thread-safe) that works on a copy of the
@@ -313,6 +348,16 @@ std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,
   impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (!result.found()) return std::nullopt;
   return Neighbor{result.index(), result.worstDist()};
+}
+
+std::optional<Neighbor> ReferenceIndex::nearest_and_bound(const Eigen::Vector3f& query,
+                                                          float max_squared_distance,
+                                                          float& others_squared_distance) const {
+  TwoNearestWithin result(max_squared_distance);
+  impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  others_squared_distance = result.worstDist();
+  if (!result.found()) return std::nullopt;
+  return Neighbor{result.index(), result.best()};
 }
 
 void ReferenceIndex::set_normals_and_covariances(std::vector<Eigen::Vector3f> normals,

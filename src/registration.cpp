@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "helper_thread.hpp"
+#include "nearest_memory.hpp"
 #include "point_surfaces.hpp"
 #include "sgdicp/error.hpp"
 #include "sgdicp/evaluation.hpp"
@@ -98,14 +99,18 @@ class MiniBatchPairing {
                   float d_max_sq_m) {
     const auto k = static_cast<float>(scaling_.scale());
     pairs_.resize(batch.size());
+    remember_from_now_on(batch.size());
+    if (memory_) fresh_.resize(batch.size());
     const auto part = [&](std::size_t begin, std::size_t end) {
       for (std::size_t slot = begin; slot < end; ++slot) {
         Pair& pair = pairs_[slot];
         pair.source_index = batch[slot];
         pair.s = scaling_.to_scaled(source_.points[pair.source_index]);
         pair.moved = pose.transform(pair.s);
-        const auto nn =
-            reference_.nearest(scaling_.to_metric(pair.moved).cast<float>(), d_max_sq_m);
+        const Eigen::Vector3f query = scaling_.to_metric(pair.moved).cast<float>();
+        const auto nn = memory_
+                            ? memory_->nearest(pair.source_index, query, d_max_sq_m, fresh_[slot])
+                            : reference_.nearest(query, d_max_sq_m);
         pair.reference_index = nn ? nn->index : kNoPair;
         pair.distance = nn ? std::sqrt(nn->squared_distance) / k : 0.0f;
       }
@@ -116,6 +121,19 @@ class MiniBatchPairing {
     } else {
       part(0, batch.size());
     }
+    // In batch order after the queries: a batch that straddles two epochs may hold a point twice.
+    if (!memory_) return;
+    for (std::size_t slot = 0; slot < batch.size(); ++slot)
+      memory_->remember(batch[slot], fresh_[slot]);
+  }
+
+  // A run that has drawn every source point once draws them again (the next epoch): from then on
+  // each query leaves what certifies the next one (NearestMemory). The first pass does not pay
+  // for the certificates, which a large source drawn for a fraction of a pass would never use.
+  void remember_from_now_on(std::size_t batch_points) {
+    if (memory_) return;
+    queried_ += batch_points;
+    if (queried_ > source_.size()) memory_.emplace(reference_, source_.size());
   }
 
   // The paper's pair cost without kernel or trimming: the short path of the hot loop. Kept
@@ -201,6 +219,9 @@ class MiniBatchPairing {
   bool plain_ = false;
   std::vector<Pair> pairs_;  // one slot per batch point, then the pairs the cost uses
   std::vector<CostAccumulator::PairTerm> terms_;  // one per pair, when made in two halves
+  std::size_t queried_ = 0;                       // source points drawn until memory_ starts
+  std::optional<detail::NearestMemory> memory_;
+  std::vector<detail::NearestMemory::Entry> fresh_;  // one per batch point
   // With num_threads >= 2 the batches' queries are split with the calling thread's helper
   // (helper_thread.hpp).
   bool split_queries_ = false;

@@ -1,4 +1,5 @@
 // Tests of the reference kd-tree (nearest_neighbor.hpp) against brute force.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -156,6 +157,60 @@ TEST_F(NearestNeighborTest, MaxDistanceBound) {
     ASSERT_TRUE(hit.has_value()) << "query " << i;
     ASSERT_EQ(hit->squared_distance, b.squared_distance);
     ASSERT_FALSE(index.nearest(queries_[i], below).has_value()) << "query " << i;
+  }
+}
+
+// nearest_and_bound: nearest()'s point at nearest()'s distance, and the second-nearest distance
+// (brute force) when it lies within the bound, else the bound itself.
+TEST_F(NearestNeighborTest, NearestAndBoundIsNearestWithTheRunnerUp) {
+  const ReferenceIndex index(cloud_);
+  std::mt19937_64 rng(35);
+  std::size_t seconds_within = 0;
+  for (std::size_t i = 0; i < queries_.size(); ++i) {
+    const Brute& b = expected_[i];
+    const float bound = b.squared_distance * uniform(rng, 0.0, 3.0) + uniform(rng, 0.0, 1e-2);
+    float others = -1.0F;
+    const auto got = index.nearest_and_bound(queries_[i], bound, others);
+    const auto want = index.nearest(queries_[i], bound);
+    ASSERT_EQ(got.has_value(), want.has_value()) << "query " << i;
+    if (want) {
+      ASSERT_EQ(got->index, want->index) << "query " << i;
+      ASSERT_EQ(got->squared_distance, want->squared_distance) << "query " << i;
+    }
+    float second = std::numeric_limits<float>::infinity();
+    for (std::size_t p = 0; p < cloud_.size(); ++p) {
+      if (want && p == want->index) continue;
+      second = std::min(second, squared_distance(cloud_.points[p], queries_[i]));
+    }
+    if (second < bound) {
+      ASSERT_EQ(others, second) << "query " << i;
+      ++seconds_within;
+    } else {
+      ASSERT_EQ(others, bound) << "query " << i;
+    }
+  }
+  EXPECT_GT(seconds_within, queries_.size() / 4);
+}
+
+// On a grid every query has ties; the runner-up query must still break them as nearest() does.
+TEST(NearestNeighbor, NearestAndBoundBreaksTiesAsNearest) {
+  PointCloud grid;
+  for (int x = 0; x < 12; ++x) {
+    for (int y = 0; y < 12; ++y) {
+      for (int z = 0; z < 12; ++z) grid.points.emplace_back(0.5F * x, 0.5F * y, 0.5F * z);
+    }
+  }
+  const ReferenceIndex index(grid, sgdicp::KdTreeSettings{.leaf_size = 4});
+  for (int x = 0; x < 22; ++x) {
+    for (int y = 0; y < 22; ++y) {
+      const Eigen::Vector3f q(0.25F * x, 0.25F * y, 1.25F);
+      float others = 0.0F;
+      const auto got = index.nearest_and_bound(q, 10.0F, others);
+      const auto want = index.nearest(q, 10.0F);
+      ASSERT_TRUE(got && want);
+      ASSERT_EQ(got->index, want->index) << x << " " << y;
+      EXPECT_EQ(others, got->squared_distance) << "a tie is its own runner-up";
+    }
   }
 }
 

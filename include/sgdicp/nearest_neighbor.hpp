@@ -74,6 +74,15 @@ class ReferenceIndex {
       const Eigen::Vector3f& query,
       float max_squared_distance = std::numeric_limits<float>::max()) const;
 
+  /// nearest(), the same point for the same arguments, and in `others_squared_distance` a lower
+  /// bound on the squared distance from query to every other reference point: the second
+  /// nearest's, or max_squared_distance when no second point lies within it. Slower than
+  /// nearest() (the search prunes against the second distance); it lets a caller certify later
+  /// queries near this one without the tree (detail::NearestMemory).
+  [[nodiscard]] std::optional<Neighbor> nearest_and_bound(const Eigen::Vector3f& query,
+                                                          float max_squared_distance,
+                                                          float& others_squared_distance) const;
+
   /// Stores the reference's normals and covariances in cloud() (one per point each, or empty),
   /// as estimate_covariances (preprocessing.hpp) computes them over this tree; prepare_reference
   /// does both. Throws InvalidInputError for another count. Not thread-safe: call it before
