@@ -167,7 +167,7 @@ class MiniBatchPairing {
   void add_general(const EulerPoseJacobian& pose, CostAccumulator& cost,
                    std::vector<float>& distances) {
     const auto term_of = [&](const Pair& pair) {
-      const Eigen::Vector3d r = scaling_.to_scaled(reference_.cloud().points[pair.reference_index]);
+      const Eigen::Vector3d r = reference_point(pair);
       if (cost_ == CostType::point_to_plane) {
         return cost.plane_term(pose.jacobian(pair.s), pair.moved - r,
                                reference_surfaces_.normal(pair.reference_index).cast<double>());
@@ -187,9 +187,18 @@ class MiniBatchPairing {
       return;
     }
     for (const Pair& pair : pairs_) {
-      cost.add(term_of(pair));
+      if (cost_ == CostType::point_to_plane) {
+        cost.add_plane(pose.jacobian(pair.s), pair.moved - reference_point(pair),
+                       reference_surfaces_.normal(pair.reference_index).cast<double>());
+      } else {
+        cost.add(term_of(pair));
+      }
       distances.push_back(pair.distance);
     }
+  }
+
+  [[nodiscard]] Eigen::Vector3d reference_point(const Pair& pair) const {
+    return scaling_.to_scaled(reference_.cloud().points[pair.reference_index]);
   }
 
   // Whether the cost reads only normals and covariances the clouds store.

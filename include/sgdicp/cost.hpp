@@ -148,15 +148,23 @@ class CostAccumulator {
   /// callgrind). A zero normal (no plane) gives a zero term, as n n^T = 0 does.
   [[nodiscard]] PairTerm plane_term(const PoseJacobianMatrix& j, const Eigen::Vector3d& e,
                                     const Eigen::Vector3d& normal) const {
+    CostAccumulator one(kernel_, kernel_scale_, with_hessian_);
+    one.add_plane(j, e, normal);
+    return {one.jte_, one.jtj_, one.cost_};
+  }
+
+  /// Adds plane_term() at once, the same sums bit for bit without the term in between (a 6x6
+  /// written and read again: ~6 % of the bunny's registration, measured with perf).
+  [[gnu::always_inline]] void add_plane(const PoseJacobianMatrix& j, const Eigen::Vector3d& e,
+                                        const Eigen::Vector3d& normal) {
     const PoseVector jtn = j.transpose() * normal;
     const double r = normal.dot(e);
     const double s = r * r;
     const double w = kernel_weight(kernel_, s, kernel_scale_);
-    PairTerm t;
-    t.jte.noalias() = (w * r) * jtn;
-    if (with_hessian_) t.jtj.noalias() = (w * jtn) * jtn.transpose();
-    t.rho = kernel_rho(kernel_, s, kernel_scale_);
-    return t;
+    jte_.noalias() += (w * r) * jtn;
+    if (with_hessian_) jtj_.noalias() += (w * jtn) * jtn.transpose();
+    cost_ += kernel_rho(kernel_, s, kernel_scale_);
+    ++pairs_;
   }
 
   void add(const PairTerm& t) {
