@@ -123,8 +123,9 @@ class MiniBatchPairing {
     }
     // In batch order after the queries: a batch that straddles two epochs may hold a point twice.
     if (!memory_) return;
-    for (std::size_t slot = 0; slot < batch.size(); ++slot)
+    for (std::size_t slot = 0; slot < batch.size(); ++slot) {
       memory_->remember(batch[slot], fresh_[slot]);
+    }
   }
 
   // A run that has drawn every source point once draws them again (the next epoch): from then on

@@ -618,5 +618,26 @@ TEST(Threads, TwoThreadsRegisterBitIdenticallyToOne) {
   }
 }
 
+// A small source is drawn many times, so from its second pass on its queries go through the
+// run's memory (src/nearest_memory.hpp): looked up in both halves of a batch, new entries written
+// after them. Still the same bits as one thread (and clean under ThreadSanitizer, which runs the
+// Threads tests).
+TEST(Threads, SmallSourceDrawnManyTimesRegistersBitIdenticallyOnTwoThreads) {
+  const Eigen::Matrix4d T_gt = make_transform(6 * kDeg, -4 * kDeg, 9 * kDeg, {0.05, -0.03, 0.02});
+  const PointCloud reference = synthetic_scene(63, 700);
+  const PointCloud source = transformed(synthetic_scene(64, 600), T_gt.inverse());
+  SgdSettings one;
+  SgdSettings two = one;
+  two.num_threads = 2;
+  const RegistrationResult a = align(source, reference, one);
+  const RegistrationResult b = align(source, reference, two);
+  EXPECT_TRUE(a.converged) << a.message;
+  EXPECT_GT(a.points_processed, 3 * source.size()) << "the memory starts with the second pass";
+  EXPECT_GE(a.points_processed, a.iterations * 32) << "batches of >= 32 are split";
+  EXPECT_EQ(a.T_reference_source, b.T_reference_source);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.inlier_rmse_m, b.inlier_rmse_m);
+}
+
 }  // namespace
 }  // namespace sgdicp
