@@ -301,8 +301,10 @@ def test_result_has_every_field(scene):
     np.testing.assert_array_equal(r.T_reference_source[3], [0, 0, 0, 1])
     assert r.converged is True and r.stop_reason == "converged" and r.message
     assert r.iterations > 0 and r.points_processed == r.iterations * 160
-    # The coarse phase and 3 refinement stages, or fewer once the pairs settle (settle_tolerance).
+    # The coarse phase and 3 refinement stages, or fewer once the pairs settle (settle_tolerance);
+    # all four when settling is off.
     assert 2 <= r.stages <= 4
+    assert sgd_icp.register(source, reference, settle_tolerance=0).stages == 4
     assert r.evaluated_points == 2000 and 0 < r.inliers <= r.evaluated_points
     assert r.inlier_ratio == pytest.approx(r.inliers / r.evaluated_points)
     assert 0 < r.inlier_rmse_m < 0.03
