@@ -28,6 +28,7 @@
 #include "sgdicp/error.hpp"
 #include "sgdicp/scaling.hpp"
 #include "sgdicp/threads.hpp"
+#include "symmetric_eigen.hpp"
 
 namespace sgdicp {
 namespace {
@@ -165,16 +166,19 @@ PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vect
   // The closed form costs a fraction of the iterative solver, but its smallest eigenvector
   // loses precision when the two smallest eigenvalues are close (a line, a point, a blob):
   // those neighbourhoods are solved again iteratively.
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
-  solver.computeDirect(covariance);
-  const Eigen::Vector3d& direct = solver.eigenvalues();
-  if (!(direct[1] - direct[0] > kDirectSolveRatio * direct[2])) solver.compute(covariance);
-  const Eigen::Vector3d& eigenvalues = solver.eigenvalues();  // ascending
+  detail::SmallestEigenpair direct = detail::smallest_eigenpair(covariance);
+  bool solved = true;
+  if (!(direct.values[1] - direct.values[0] > kDirectSolveRatio * direct.values[2])) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+    solved = solver.info() == Eigen::Success;
+    direct = {solver.eigenvalues(), solver.eigenvectors().col(0)};
+  }
+  const Eigen::Vector3d& eigenvalues = direct.values;  // ascending
   const double resolution = kResolutionUlps * FLT_EPSILON * mean.cwiseAbs().maxCoeff();
   const double floor = resolution * resolution;
   // Negated comparisons so that a NaN (which cannot arise from finite input) is degenerate too.
-  const bool degenerate = count < kMinNeighbors || solver.info() != Eigen::Success ||
-                          !(eigenvalues[2] > floor) ||
+  const bool degenerate = count < kMinNeighbors || !solved ||
+                          !(direct.vector.squaredNorm() > 0.5) || !(eigenvalues[2] > floor) ||
                           !(eigenvalues[1] > std::max(floor, kCollinearRatio * eigenvalues[2]));
 
   if (variation != nullptr) {
@@ -188,7 +192,7 @@ PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vect
                                          : Eigen::Matrix3f(covariance.cast<float>());
     return out;
   }
-  Eigen::Vector3d normal = solver.eigenvectors().col(0).normalized();
+  Eigen::Vector3d normal = direct.vector.normalized();
   if (normal.dot(settings.viewpoint.cast<double>() - point.cast<double>()) < 0.0) normal = -normal;
   out.normal = normal.cast<float>();
   if (settings.regularize) {
