@@ -348,10 +348,9 @@ void check_voxel_size(double voxel_size_m) {
 class VoxelGrid {
  public:
   // `largest`: the cloud's largest_coordinate.
-  VoxelGrid(double voxel_size_m, float largest)
-      : size_(voxel_size_m), inverse_size_(1.0 / voxel_size_m) {
+  VoxelGrid(double voxel_size_m, float largest) : inverse_size_(1.0 / voxel_size_m) {
     check_voxel_size(voxel_size_m);
-    if (!(std::floor(static_cast<double>(largest) / size_) + 1.0 < kMaxVoxelIndex)) {
+    if (!(std::floor(static_cast<double>(largest) / voxel_size_m) + 1.0 < kMaxVoxelIndex)) {
       throw InvalidSettingsError("voxel size " + format_number(voxel_size_m) +
                                  " m is too small for coordinate " + format_number(largest) +
                                  " m: voxel indices would exceed 2^62");
@@ -373,7 +372,6 @@ class VoxelGrid {
     return static_cast<double>(i) > q ? i - 1 : i;
   }
 
-  double size_;
   double inverse_size_;
 };
 
