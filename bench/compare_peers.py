@@ -7,7 +7,7 @@ Runs every method on the same pairs (default: every ../shared/data/pairs/*.txt n
 repository, plus the 7-Scenes pairs of bench/make_sevenscenes_pairs.py when generated), alternating the methods pair by pair (the order rotates each time) for --reps
 rounds, and writes per-run rows (runs.csv), a summary (summary.csv) and Markdown tables
 (report.md) to --out. Progress goes to stderr, the report to stdout. Needs the sgd_icp package
-(`pip install .`); the runners are its module sgd_icp.peers.
+(`pip install .`); the runners are the harness bench/peers/ beside this script.
 
 Timed region ("time"): building the search structure + normals/covariances (+ voxel downsampling
 where used) + registration, from clouds already in the library's own container. File I/O and
@@ -48,8 +48,13 @@ import sys
 import time
 from typing import NamedTuple
 
+# The harness bench/peers/ (not installed with the package): importable from this script's folder.
+BENCH = os.path.dirname(os.path.abspath(__file__))
+if BENCH not in sys.path:
+    sys.path.insert(0, BENCH)
 try:
-    from sgd_icp import peers
+    import sgd_icp  # noqa: F401 - the harness reads clouds and scores with the package
+    import peers
     NEEDS_PACKAGE = None
 except ImportError as e:  # only --pareto-from (and the pure functions of this file) work without it
     peers = None
@@ -155,10 +160,17 @@ def wants_pareto_from(argv: list[str]) -> bool:
     return any(a == "--pareto-from" or a.startswith("--pareto-from=") for a in argv)
 
 
+# Peer voxel sizes of pairs files the harness's table does not name: the hand-held BALM LiDAR
+# scans (../shared/data/pairs/balm_handheld_lidar.txt) are outdoor LiDAR, small_gicp's 0.25 m.
+EXTRA_VOXEL_M = {"balm_handheld_lidar": 0.25}
+
+
 def settings_of(args: argparse.Namespace) -> peers.PeerSettings:
     """The peers' settings of the command line (--voxel PAIRS=METRES overrides the defaults)."""
     s = peers.PeerSettings(max_distance_m=args.max_distance, max_iterations=args.max_iterations,
                            timeout_s=args.timeout, threads=args.threads)
+    for k, val in EXTRA_VOXEL_M.items():
+        s.voxel_m.setdefault(k, val)
     for v in args.voxel:
         k, _, val = v.partition("=")
         s.voxel_m[k] = float(val)

@@ -17,7 +17,7 @@ import time
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 try:
     import sgd_icp
-    from sgd_icp.peers import read_pairs
+    from peers import read_pairs  # bench/peers/, beside this script
 except ImportError as e:
     sys.exit(f"bench/kdtree_build_peers.py needs the sgd_icp Python package ({e}): "
              "run `pip install .` in the repository (docs/python.md)")

@@ -10,7 +10,7 @@ Kinect high-complexity map with moved copies; laser: libpointmatcher car; Velody
 and says so in the report. Every registration of ours is run by the sgdicp CLI (`bench`,
 `register`). Table I also has the peer libraries users would pick instead (small_gicp, Open3D,
 PCL through bench/pcl_adapter), measured in the same run on the same pairs by the runners of
-bench/compare_peers.py (the package's sgd_icp.peers: each registration in a worker process, stopped
+bench/compare_peers.py (the harness bench/peers/: each registration in a worker process, stopped
 after --timeout); a peer that is not installed or not built is reported as not run. Needs the
 sgd_icp package (`pip install .`) and matplotlib.
 
@@ -43,10 +43,13 @@ import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
+# The harness bench/peers/ (not installed with the package, which it needs).
+sys.path.insert(0, os.path.join(REPO, "bench"))
 try:
+    import sgd_icp  # noqa: F401 - the harness reads clouds and scores with the package
     # pairs files, the `sgdicp bench` runner and the peers' runners (those of bench/compare_peers.py)
-    from sgd_icp.peers import (SUCCESS_THRESHOLDS, PeerSettings, Session, build_methods, find_pcl_adapter,
-                               read_pairs, run_bench)
+    from peers import (SUCCESS_THRESHOLDS, PeerSettings, Session, build_methods, find_pcl_adapter,
+                       read_pairs, run_bench)
 except ImportError as e:
     sys.exit(f"eval/reproduce.py needs the sgd_icp Python package ({e}): "
              "run `pip install .` in the repository (docs/python.md)")
@@ -289,11 +292,11 @@ def exp_table(runner: Runner, pairs_files: list[str], configs: list[str], repeat
 
 
 class Peers:
-    """The peer libraries of Table I, run by sgd_icp.peers (the runners of bench/compare_peers.py):
+    """The peer libraries of Table I, run by bench/peers/ (the runners of bench/compare_peers.py):
     each registration in a worker process of its library, stopped after timeout_s."""
 
     def __init__(self, wanted: list[str], exe: str, timeout_s: float):
-        self.active: list = []                    # sgd_icp.peers.Method that can run
+        self.active: list = []                    # peers.Method that can run
         self.not_run: list[tuple[str, str]] = []  # (method, reason)
         self.versions: dict[str, str] = {}
         self.settings = PeerSettings(timeout_s=timeout_s)
@@ -840,7 +843,7 @@ def peers_md(peers: Peers, t1: list[dict]) -> str:
         ran = ", ".join(f"**{PEER_NAME[m.name]}** (`{m.name}`: {m.description})" for m in peers.active)
         vers = "".join(f", {k} {v}" for k, v in peers.versions.items())
         text = [f"**Peers** (Table I only{vers}): {ran}.",
-                "Run on the same pairs in this run by the runners of `bench/compare_peers.py` (`sgd_icp.peers`), "
+                "Run on the same pairs in this run by the runners of `bench/compare_peers.py` (`bench/peers`), "
                 "each registration in a warm worker process of its library"
                 + (" (PCL in its persistent C++ adapter `bench/pcl_adapter`)" if "pcl" in fam else "")
                 + f", after one untimed warm-up run per method; identity start, maximum correspondence distance "

@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
+# The peer-comparison harness bench/peers/ (not part of the installed package): importable as
+# `peers` by test_peers.py, fake_peers.py and bench/compare_peers.py, and by their worker processes
+# (multiprocessing's spawn passes sys.path on).
+if str(REPO_ROOT / "bench") not in sys.path:
+    sys.path.insert(0, str(REPO_ROOT / "bench"))
 
 
 def shared_data_dir() -> Path:

@@ -1,4 +1,4 @@
-"""Peers that misbehave on purpose, for the tests of sgd_icp.peers (test_peers.py). Module-level
+"""Peers that misbehave on purpose, for the tests of the harness bench/peers/ (test_peers.py). Module-level
 functions, so that a worker process can import them."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 
-from sgd_icp.peers import Outcome, Task
-from sgd_icp.peers.runners import cloud_f64
+from peers import Outcome, Task  # bench/peers/, on sys.path by conftest.py
+from peers.runners import cloud_f64
 
 HANG_ABOVE_POINTS = 1000  # the hanging peer hangs on sources larger than this
 

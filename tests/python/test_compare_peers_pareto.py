@@ -24,7 +24,7 @@ RUN_COLUMNS = ["pairs_file", "line", "method", "family", "rep", "status", "time_
 def load_compare_peers(monkeypatch=None, without_package=False):
     """The script as a module; without_package: as if the sgd_icp package were not installed."""
     if without_package:
-        monkeypatch.setitem(sys.modules, "sgd_icp", None)  # `from sgd_icp import peers` raises ImportError
+        monkeypatch.setitem(sys.modules, "sgd_icp", None)  # `import sgd_icp` raises ImportError
     spec = importlib.util.spec_from_file_location("compare_peers_pareto_under_test", SCRIPT)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

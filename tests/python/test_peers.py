@@ -1,4 +1,4 @@
-"""sgd_icp.peers: pairs files, the worker process with its time limit, the session, and
+"""The harness bench/peers/: pairs files, the worker process with its time limit, the session, and
 bench/compare_peers.py going on after a peer that hangs or crashes (fake peers, fake_peers.py)."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import fake_peers
+import peers  # bench/peers/, on sys.path by conftest.py
 import sgd_icp
 from conftest import REPO_ROOT, make_transform, synthetic_scene, transformed
-from sgd_icp import peers
 
 # The fake pairs files have no voxel size of their own: the peers' warning is expected.
 pytestmark = pytest.mark.filterwarnings("ignore:peers. no voxel size:UserWarning")
@@ -209,3 +209,10 @@ def test_voxel_table_prefixes_and_warns_once_for_an_unknown_pairs_file():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert settings.voxel_for("my_scans") == settings.default_voxel_m  # once per stem
+
+
+def test_the_harness_is_not_part_of_the_package():
+    """bench/peers/ is the repository's, imported from bench/; the installed package has no peers."""
+    assert importlib.util.find_spec("sgd_icp.peers") is None
+    assert not os.path.exists(os.path.join(os.path.dirname(sgd_icp.__file__), "peers"))
+    assert os.path.dirname(os.path.abspath(peers.__file__)) == str(REPO_ROOT / "bench" / "peers")

@@ -4,10 +4,13 @@ same timed region (search structure + normals/covariances + registration, file I
 every registration in a child process with a time limit, so that a library that hangs or crashes
 is recorded ("timeout", "crashed") and the run goes on.
 
-The runners of bench/compare_peers.py and eval/reproduce.py (docs/performance.md). The peer
-libraries are optional and imported only in the worker processes that run them.
+The runners of bench/compare_peers.py and eval/reproduce.py (docs/performance.md): a plain
+package folder of the repository, not part of the installed sgd_icp package, which it needs
+(`pip install .`). Scripts import it with bench/ on sys.path (a script in bench/ has it there
+already; eval/reproduce.py and tests/python/conftest.py add it). The peer libraries are optional
+and imported only in the worker processes that run them.
 
->>> from sgd_icp import peers
+>>> import peers  # with bench/ on sys.path
 >>> settings = peers.PeerSettings(timeout_s=30)
 >>> methods = {m.name: m for m in peers.build_methods(settings, "build/sgdicp", None)}
 >>> pairs = peers.read_pairs("../shared/data/pairs/libpointmatcher_car.txt")

@@ -26,7 +26,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import read_point_cloud
+from sgd_icp import read_point_cloud
 from . import runners
 from .cli import run_bench
 from .pairs import Pair, errors_against

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import (
+from sgd_icp import (
     FormatError,
     IoError,
     rotation_error_euler_sum,

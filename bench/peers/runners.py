@@ -17,7 +17,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import read_points
+from sgd_icp import read_points
 
 
 @dataclass
