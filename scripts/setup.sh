@@ -11,7 +11,7 @@ packages=(build-essential cmake pkg-config libeigen3-dev libnanoflann-dev libcli
   clang-14 libclang-rt-14-dev llvm-14)  # the last three: scripts/fuzz.sh (docs/fuzzing.md)
 for arg in "$@"; do
   case "$arg" in
-    --open3d) packages+=(libegl1 libgl1 libx11-6 libusb-1.0-0 libgomp1) ;;
+    --open3d) packages+=(libegl1 libgl1 libx11-6 libusb-1.0-0 libudev1 libidn2-0 libgomp1) ;;
     *) echo "setup: unknown option $arg (expected --open3d)" >&2; exit 2 ;;
   esac
 done

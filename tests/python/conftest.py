@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -94,6 +95,35 @@ def find_cli() -> Path | None:
     if on_path:
         candidates.append(Path(on_path))
     return next((c for c in candidates if c.is_file() and os.access(c, os.X_OK)), None)
+
+
+# The Debian packages of the system libraries that the open3d wheel links to (the NEEDED entries of
+# its libOpen3D.so); `scripts/setup.sh --open3d` installs the same list (test_open3d_skip.py checks).
+OPEN3D_DEBIAN_PACKAGES = "libegl1 libgl1 libx11-6 libusb-1.0-0 libudev1 libidn2-0 libgomp1"
+
+
+def import_open3d():
+    """open3d, or a skip of the calling test module when it is not installed or cannot load: a pip
+    wheel on a machine without the system libraries it links to raises ImportError
+    (`libusb-1.0.so.0: cannot open shared object file`), which pytest.importorskip does not skip.
+    With SGDICP_REQUIRE_OPEN3D=1 (a run meant to test Open3D) the module fails instead."""
+    try:
+        import open3d
+    except ModuleNotFoundError as e:
+        if e.name == "open3d":
+            why = "open3d is not installed (pip install \".[open3d]\")"
+        else:
+            why = f"open3d cannot be imported ({e}): pip install --force-reinstall open3d"
+    except (ImportError, OSError) as e:
+        library = re.search(r"lib[\w.+-]*\.so[\w.]*", str(e))
+        why = (f"open3d is installed but cannot load {library.group(0) if library else 'its libraries'} "
+               f"({e}): install the system libraries its wheel needs with scripts/setup.sh --open3d "
+               f"(apt-get install {OPEN3D_DEBIAN_PACKAGES})")
+    else:
+        return open3d
+    if os.environ.get("SGDICP_REQUIRE_OPEN3D") == "1":
+        pytest.fail(why + " [SGDICP_REQUIRE_OPEN3D=1]", pytrace=False)
+    pytest.skip(why, allow_module_level=True)
 
 
 @pytest.fixture(scope="session")
