@@ -4,7 +4,8 @@
 // estimator of estimate_covariances (preprocessing.hpp), over the cloud's own KD-tree. An SGD
 // run touches only the neighbourhoods its mini-batches reach (a few tens of thousands of points
 // of a 100k-300k-point scan), so estimating those alone costs a fraction of estimating every
-// point (docs/performance.md), and gives bit-identical values. Private to the library.
+// point (sgd-plane 1.9x less CPU on KITTI pairs, 3.3x on Kinect frames), and gives
+// bit-identical values. Private to the library.
 #include <cstdint>
 #include <memory>
 #include <optional>

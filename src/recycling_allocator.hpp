@@ -3,7 +3,8 @@
 // pass instead of handing them back to the system. A registration's tables are a few MB each;
 // glibc serves such blocks with mmap (or trims them off its heap at the free), so every table of
 // every registration had its pages faulted in and zeroed again by the kernel: ~10 % of a
-// one-thread registration run in a loop on KITTI scans (docs/performance.md, twelfth round).
+// one-thread registration run in a loop on KITTI scans (57,700 page faults in 40 registrations,
+// 5,880 with this cache: 1.17x faster end to end).
 // Blocks of at least kMinBlockBytes are rounded up to a power of two and kept, up to
 // kMaxKeptBytes in all, in one process-wide cache shared by every thread (a pass's halves are
 // made on two threads and freed on one); smaller blocks go straight to operator new. The kept
