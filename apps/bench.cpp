@@ -22,9 +22,9 @@
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pairs.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/tools/pairs.hpp"
 
 namespace sgdicp::cli {
 namespace {

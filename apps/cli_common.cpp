@@ -7,9 +7,9 @@
 #include <type_traits>
 #include <utility>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/settings.hpp"
-#include "sgdicp/transform_io.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/transform_io.hpp"
+#include "sgdicp/registration/settings.hpp"
 
 namespace sgdicp::cli {
 namespace {

@@ -6,9 +6,9 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "sgdicp/depth_image.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/io/depth_image.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/registration/registration.hpp"
 
 namespace sgdicp::cli {
 

@@ -4,10 +4,10 @@
 #include <chrono>
 #include <cmath>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/preprocessing.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/points/random_downsample.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/registration.hpp"
 
 namespace sgdicp::cli {
 namespace {

@@ -9,10 +9,10 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 
-#include "sgdicp/methods.hpp"
-#include "sgdicp/point_cloud.hpp"
-#include "sgdicp/result.hpp"
-#include "sgdicp/settings.hpp"
+#include "sgdicp/core/point_cloud.hpp"
+#include "sgdicp/core/result.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/settings.hpp"
 
 namespace sgdicp::cli {
 

@@ -13,12 +13,12 @@
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/frame_source.hpp"
-#include "sgdicp/odometry.hpp"
-#include "sgdicp/render.hpp"
-#include "sgdicp/trajectory_io.hpp"
-#include "sgdicp/trajectory_metrics.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/frame_source.hpp"
+#include "sgdicp/io/trajectory_io.hpp"
+#include "sgdicp/metrics/trajectory_metrics.hpp"
+#include "sgdicp/odometry/odometry.hpp"
+#include "sgdicp/tools/render.hpp"
 
 namespace sgdicp::cli {
 namespace {

@@ -12,10 +12,10 @@
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/render.hpp"
-#include "sgdicp/transform_io.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/transform_io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/tools/render.hpp"
 
 namespace sgdicp::cli {
 namespace {

@@ -5,7 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
-#include "sgdicp/error.hpp"
+#include "sgdicp/core/error.hpp"
 #include "sgdicp/version.hpp"
 
 int main(int argc, char** argv) {

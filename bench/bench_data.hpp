@@ -12,9 +12,9 @@
 
 #include <Eigen/Core>
 
-#include <sgdicp/io.hpp>
-#include <sgdicp/pairs.hpp>
-#include <sgdicp/point_cloud.hpp>
+#include <sgdicp/core/point_cloud.hpp>
+#include <sgdicp/io/io.hpp>
+#include <sgdicp/tools/pairs.hpp>
 
 #ifndef SGDICP_BENCH_DATA_DIR
 #define SGDICP_BENCH_DATA_DIR "../shared/data"

@@ -12,12 +12,12 @@
 #include <random>
 #include <string>
 
-#include <sgdicp/io.hpp>
-#include <sgdicp/metrics.hpp>
-#include <sgdicp/nearest_neighbor.hpp>
-#include <sgdicp/pose.hpp>
-#include <sgdicp/preprocessing.hpp>
-#include <sgdicp/registration.hpp>
+#include <sgdicp/core/pose.hpp>
+#include <sgdicp/index/nearest_neighbor.hpp>
+#include <sgdicp/io/io.hpp>
+#include <sgdicp/metrics/metrics.hpp>
+#include <sgdicp/points/random_downsample.hpp>
+#include <sgdicp/registration/registration.hpp>
 
 namespace {
 

@@ -13,7 +13,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include <sgdicp/nearest_neighbor.hpp>
+#include <sgdicp/index/nearest_neighbor.hpp>
 
 #include "bench_data.hpp"
 

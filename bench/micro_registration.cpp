@@ -16,9 +16,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include <sgdicp/metrics.hpp>
-#include <sgdicp/nearest_neighbor.hpp>
-#include <sgdicp/registration.hpp>
+#include <sgdicp/index/nearest_neighbor.hpp>
+#include <sgdicp/metrics/metrics.hpp>
+#include <sgdicp/registration/registration.hpp>
 
 #include "bench_data.hpp"
 

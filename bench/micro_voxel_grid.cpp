@@ -9,8 +9,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include <sgdicp/preprocessing.hpp>
-#include <sgdicp/registration.hpp>
+#include <sgdicp/points/voxel_grid.hpp>
+#include <sgdicp/registration/registration.hpp>
+#include <sgdicp/surfaces/voxel_surfaces.hpp>
 
 #include "bench_data.hpp"
 

@@ -14,9 +14,9 @@
 #include <iostream>
 #include <string>
 
-#include <sgdicp/io.hpp>
-#include <sgdicp/nearest_neighbor.hpp>
-#include <sgdicp/registration.hpp>
+#include <sgdicp/index/nearest_neighbor.hpp>
+#include <sgdicp/io/io.hpp>
+#include <sgdicp/registration/registration.hpp>
 
 namespace {
 

@@ -9,8 +9,8 @@
 #include <cstdlib>
 #include <span>
 
-#include "sgdicp/depth_image.hpp"
-#include "sgdicp/error.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/depth_image.hpp"
 
 namespace {
 

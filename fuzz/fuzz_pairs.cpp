@@ -8,9 +8,9 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/pose.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/core/pose.hpp"
+#include "sgdicp/tools/pairs.hpp"
 
 namespace {
 

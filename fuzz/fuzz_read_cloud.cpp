@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <span>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/io.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/io.hpp"
 
 #ifndef SGDICP_FUZZ_FORMAT
 #error "define SGDICP_FUZZ_FORMAT to a FileFormat enumerator (pcd, ply, ...)"

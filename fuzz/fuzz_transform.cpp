@@ -7,9 +7,9 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/pose.hpp"
-#include "sgdicp/transform_io.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/core/pose.hpp"
+#include "sgdicp/io/transform_io.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

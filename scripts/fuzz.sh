@@ -60,7 +60,7 @@ if [[ $mode == coverage ]]; then
   objects=()
   for name in $targets; do objects+=(-object "$build_dir/fuzz/$name"); done
   llvm-cov-14 report "${objects[@]:1}" -instr-profile="$build_dir/fuzz.profdata" \
-    src/io/*.cpp src/depth_image.cpp src/parse_number.cpp src/transform_io.cpp src/pairs.cpp
+    src/io/*.cpp src/io/depth_image.cpp src/io/parse_number.cpp src/io/transform_io.cpp src/tools/pairs.cpp
   exit 0
 fi
 

@@ -8,7 +8,7 @@
 
 #include <Eigen/Core>
 
-#include "sgdicp/point_cloud.hpp"
+#include "sgdicp/core/point_cloud.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp::test {

@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/convergence.hpp"
-#include "sgdicp/refinement.hpp"
+#include "sgdicp/solver/convergence.hpp"
+#include "sgdicp/solver/refinement.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/cost.hpp"
-#include "sgdicp/robust_kernel.hpp"
+#include "sgdicp/costs/cost.hpp"
+#include "sgdicp/costs/robust_kernel.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

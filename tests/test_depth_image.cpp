@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "sgdicp/depth_image.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/frame_source.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/trajectory_metrics.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/depth_image.hpp"
+#include "sgdicp/io/frame_source.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/metrics/trajectory_metrics.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

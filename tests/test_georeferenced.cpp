@@ -12,11 +12,11 @@
 #include <algorithm>
 #include <string>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

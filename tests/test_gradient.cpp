@@ -10,8 +10,8 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
-#include "sgdicp/point_to_point.hpp"
-#include "sgdicp/pose.hpp"
+#include "sgdicp/core/pose.hpp"
+#include "sgdicp/costs/point_to_point.hpp"
 #include "test_support.hpp"
 
 namespace {

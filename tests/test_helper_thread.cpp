@@ -1,5 +1,5 @@
-// The helper thread of a registration's mini-batch queries (src/helper_thread.hpp).
-#include "helper_thread.hpp"
+// The helper thread of a registration's mini-batch queries (src/util/helper_thread.hpp).
+#include "util/helper_thread.hpp"
 
 #include <algorithm>
 #include <stdexcept>

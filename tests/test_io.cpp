@@ -31,8 +31,8 @@
 #include <gtest/gtest.h>
 
 #include "allocation_tracker.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/io.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/io.hpp"
 
 namespace sgdicp {
 namespace {

@@ -9,12 +9,13 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/preprocessing.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/surfaces/normals.hpp"
+#include "sgdicp/surfaces/prepare_reference.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

@@ -1,4 +1,4 @@
-// Tests of the certified nearest-neighbour memory of a run (src/nearest_memory.hpp): every
+// Tests of the certified nearest-neighbour memory of a run (src/index/nearest_memory.hpp): every
 // answer is the tree's, point and distance bit for bit, whether it came from memory or not.
 #include <cstdint>
 #include <optional>
@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "nearest_memory.hpp"
-#include "sgdicp/nearest_neighbor.hpp"
+#include "index/nearest_memory.hpp"
+#include "sgdicp/index/nearest_neighbor.hpp"
 
 namespace sgdicp::detail {
 namespace {

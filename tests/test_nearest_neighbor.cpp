@@ -11,8 +11,8 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/nearest_neighbor.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/index/nearest_neighbor.hpp"
 #include "test_support.hpp"
 
 namespace {

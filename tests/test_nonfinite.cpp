@@ -8,10 +8,10 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/registration.hpp"
-#include "sgdicp/settings.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/registration/settings.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

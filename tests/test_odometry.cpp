@@ -10,13 +10,13 @@
 #include <gtest/gtest.h>
 
 #include "odometry_support.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/frame_source.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/odometry.hpp"
-#include "sgdicp/trajectory_io.hpp"
-#include "sgdicp/trajectory_metrics.hpp"
-#include "sgdicp/voxel_map.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/frame_source.hpp"
+#include "sgdicp/io/trajectory_io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/metrics/trajectory_metrics.hpp"
+#include "sgdicp/odometry/odometry.hpp"
+#include "sgdicp/odometry/voxel_map.hpp"
 
 namespace sgdicp {
 namespace {

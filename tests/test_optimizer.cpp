@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/optimizer.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/solver/optimizer.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {
@@ -160,8 +160,8 @@ TEST(Optimizer, RejectsAbsurdSettings) {
 }  // namespace
 }  // namespace sgdicp
 
-// Levenberg's damping on systems whose answer is known (src/levenberg_marquardt.hpp).
-#include "levenberg_marquardt.hpp"
+// Levenberg's damping on systems whose answer is known (src/solver/levenberg_marquardt.hpp).
+#include "solver/levenberg_marquardt.hpp"
 
 namespace sgdicp {
 namespace {

@@ -10,9 +10,9 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/pose.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/core/pose.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 namespace {

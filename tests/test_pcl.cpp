@@ -1,6 +1,6 @@
-// The PCL adaptor (sgdicp/pcl.hpp) on the bundled demo pair: pcl::PointCloud<PointT> converts
-// point for point, SgdIcp gives the transform of sgdicp::align (what the CLI runs) bit for bit,
-// near the ground truth, and moves the output cloud by it; normals of PointNormal reach the
+// The PCL adaptor (sgdicp/adapters/pcl.hpp) on the bundled demo pair: pcl::PointCloud<PointT>
+// converts point for point, SgdIcp gives the transform of sgdicp::align (what the CLI runs) bit for
+// bit, near the ground truth, and moves the output cloud by it; normals of PointNormal reach the
 // point-to-plane cost.
 #include <cmath>
 #include <filesystem>
@@ -10,12 +10,12 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
-#include "sgdicp/io.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pcl.hpp"
-#include "sgdicp/preprocessing.hpp"
-#include "sgdicp/registration.hpp"
-#include "sgdicp/transform_io.hpp"
+#include "sgdicp/adapters/pcl.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/io/transform_io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/surfaces/normals.hpp"
 
 namespace sgdicp {
 namespace {

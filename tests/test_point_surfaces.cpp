@@ -3,8 +3,8 @@
 // and a cloud's own normals or covariances are used as they are.
 #include <gtest/gtest.h>
 
-#include "point_surfaces.hpp"
-#include "sgdicp/preprocessing.hpp"
+#include "sgdicp/surfaces/normals.hpp"
+#include "surfaces/point_surfaces.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
-#include "sgdicp/pose.hpp"
+#include "sgdicp/core/pose.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -1,5 +1,6 @@
-// Tests of preprocessing.hpp: normals and covariances against brute force and known surfaces,
-// thread-count independence, degenerate neighbourhoods, voxel and random downsampling.
+// Tests of the surfaces (surfaces/normals.hpp) and grids (points/voxel_grid.hpp): normals and
+// covariances against brute force and known surfaces, thread-count independence, degenerate
+// neighbourhoods, voxel and random downsampling.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -15,10 +16,15 @@
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
 
-#include "point_surfaces.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/nearest_neighbor.hpp"
-#include "sgdicp/preprocessing.hpp"
+#include "points/voxel_table.hpp"
+#include "registration/reference_index.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/index/nearest_neighbor.hpp"
+#include "sgdicp/points/random_downsample.hpp"
+#include "sgdicp/points/voxel_grid.hpp"
+#include "sgdicp/surfaces/normals.hpp"
+#include "sgdicp/surfaces/voxel_surfaces.hpp"
+#include "surfaces/point_surfaces.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -1,5 +1,5 @@
-// The block cache of the voxel passes' temporary arrays (src/recycling_allocator.hpp).
-#include "recycling_allocator.hpp"
+// The block cache of the voxel passes' temporary arrays (src/util/recycling_allocator.hpp).
+#include "util/recycling_allocator.hpp"
 
 #include <atomic>
 #include <cstdint>

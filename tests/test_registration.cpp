@@ -8,12 +8,12 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/evaluation.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/registration/evaluation.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {
@@ -633,9 +633,9 @@ TEST(Threads, TwoThreadsRegisterBitIdenticallyToOne) {
 }
 
 // A small source is drawn many times, so from its second pass on its queries go through the
-// run's memory (src/nearest_memory.hpp): looked up in both halves of a batch, new entries written
-// after them. Still the same bits as one thread (and clean under ThreadSanitizer, which runs the
-// Threads tests).
+// run's memory (src/index/nearest_memory.hpp): looked up in both halves of a batch, new entries
+// written after them. Still the same bits as one thread (and clean under ThreadSanitizer, which
+// runs the Threads tests).
 TEST(Threads, SmallSourceDrawnManyTimesRegistersBitIdenticallyOnTwoThreads) {
   const Eigen::Matrix4d T_gt = make_transform(6 * kDeg, -4 * kDeg, 9 * kDeg, {0.05, -0.03, 0.02});
   const PointCloud reference = synthetic_scene(63, 700);

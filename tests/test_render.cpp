@@ -1,4 +1,4 @@
-#include "sgdicp/render.hpp"
+#include "sgdicp/tools/render.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 
 #include <Eigen/Geometry>
 
-#include "sgdicp/error.hpp"
+#include "sgdicp/core/error.hpp"
 #include "test_support.hpp"
 
 namespace {

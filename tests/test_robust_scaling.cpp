@@ -8,12 +8,12 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/registration.hpp"
-#include "sgdicp/scaling.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/points/scaling.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/sampler.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/solver/sampler.hpp"
 
 namespace {
 

@@ -10,9 +10,9 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/point_cloud.hpp"
-#include "sgdicp/scaling.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/core/point_cloud.hpp"
+#include "sgdicp/points/scaling.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -9,9 +9,9 @@
 #include <sstream>
 #include <string>
 
-#include "sgdicp/methods.hpp"
-#include "sgdicp/result.hpp"
-#include "sgdicp/settings.hpp"
+#include "sgdicp/core/result.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/settings.hpp"
 
 #ifndef SGDICP_SOURCE_DIR
 #error "SGDICP_SOURCE_DIR must name the repository"

@@ -14,12 +14,13 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/methods.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/preprocessing.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/points/random_downsample.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/surfaces/prepare_reference.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)

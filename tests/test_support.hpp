@@ -14,8 +14,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "sgdicp/point_cloud.hpp"
-#include "sgdicp/pose.hpp"
+#include "sgdicp/core/point_cloud.hpp"
+#include "sgdicp/core/pose.hpp"
 
 namespace sgdicp::test {
 

@@ -1,5 +1,5 @@
-// Tests of the smallest eigenpair of a 3x3 covariance (src/symmetric_eigen.hpp) against Eigen's
-// iterative solver (an independent method: QR iterations on the tridiagonal form).
+// Tests of the smallest eigenpair of a 3x3 covariance (src/surfaces/symmetric_eigen.hpp) against
+// Eigen's iterative solver (an independent method: QR iterations on the tridiagonal form).
 #include <cmath>
 #include <limits>
 #include <random>
@@ -8,7 +8,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
-#include "symmetric_eigen.hpp"
+#include "surfaces/symmetric_eigen.hpp"
 
 namespace sgdicp::detail {
 namespace {

@@ -4,9 +4,9 @@
 
 #include <gtest/gtest.h>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/trajectory_io.hpp"
-#include "sgdicp/trajectory_metrics.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/trajectory_io.hpp"
+#include "sgdicp/metrics/trajectory_metrics.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

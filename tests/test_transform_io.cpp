@@ -15,9 +15,9 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
-#include "sgdicp/error.hpp"
-#include "sgdicp/pose.hpp"
-#include "sgdicp/transform_io.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/core/pose.hpp"
+#include "sgdicp/io/transform_io.hpp"
 #include "test_support.hpp"
 
 namespace {

@@ -14,10 +14,10 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
-#include "sgdicp/cost.hpp"
-#include "sgdicp/registration.hpp"
-#include "sgdicp/settings.hpp"
-#include "sgdicp/uncertainty.hpp"
+#include "sgdicp/costs/cost.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/registration/settings.hpp"
+#include "sgdicp/uncertainty/uncertainty.hpp"
 #include "test_support.hpp"
 
 namespace {

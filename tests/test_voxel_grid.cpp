@@ -10,14 +10,16 @@
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/io.hpp"
-#include "sgdicp/methods.hpp"
-#include "sgdicp/metrics.hpp"
-#include "sgdicp/pairs.hpp"
-#include "sgdicp/preprocessing.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/io.hpp"
+#include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/points/voxel_grid.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/surfaces/normals.hpp"
+#include "sgdicp/surfaces/voxel_surfaces.hpp"
+#include "sgdicp/tools/pairs.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {

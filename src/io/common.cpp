@@ -1,5 +1,5 @@
 // Helpers every reader and writer shares (io_internal.hpp).
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp::io_detail {
 

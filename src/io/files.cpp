@@ -1,6 +1,6 @@
 // Whole files in and out: the one bounded way the readers read a file (files.hpp) and the
 // writers write one.
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp {
 namespace {

@@ -1,5 +1,5 @@
 // Headerless float32 records: KITTI .bin (x y z intensity) and .f32 (x y z).
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp::io_detail {
 

@@ -1,9 +1,9 @@
 // Point-cloud file I/O. Every reader works on one in-memory copy of the whole file and checks
 // each access against its size, so a truncated or lying file ends in a FormatError, never in
 // an out-of-bounds read or an allocation the file cannot back.
-// This file picks the format and holds the public entry points of sgdicp/io.hpp; each format
+// This file picks the format and holds the public entry points of sgdicp/io/io.hpp; each format
 // has its own file beside it (io_internal.hpp lists them).
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp {
 

@@ -1,5 +1,5 @@
 #pragma once
-// What the point-cloud readers and writers (src/io/*.cpp, behind sgdicp/io.hpp) share: the
+// What the point-cloud readers and writers (src/io/*.cpp, behind sgdicp/io/io.hpp) share: the
 // error messages, byte and text helpers, the text cursor, the one PointSink every reader hands
 // its points to, and the entry point of each format. Internal: not installed.
 #include <algorithm>
@@ -22,10 +22,10 @@
 #include <utility>
 #include <vector>
 
-#include "../parse_number.hpp"
-#include "files.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/io.hpp"
+#include "io/files.hpp"
+#include "io/parse_number.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/io.hpp"
 
 namespace sgdicp::io_detail {
 

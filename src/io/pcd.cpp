@@ -1,5 +1,5 @@
 // PCD: reading v0.5-v0.7 ascii, binary and binary_compressed (LZF); writing binary or ascii.
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 #include <lzf.h>
 

@@ -1,5 +1,5 @@
 // PLY: reading ascii, binary little and big endian; writing binary little endian or ascii.
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp::io_detail {
 namespace {

@@ -1,5 +1,5 @@
 // Text x y z (.xyz, .txt, .csv): one point per line, a header line allowed.
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp::io_detail {
 namespace {

@@ -1,5 +1,5 @@
 // Legacy ASCII VTK POLYDATA (POINTS n float|double).
-#include "io_internal.hpp"
+#include "io/io_internal.hpp"
 
 namespace sgdicp::io_detail {
 

@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include <sgdicp/pairs.hpp>
 #include <sgdicp/sgdicp.hpp>
+#include <sgdicp/tools/pairs.hpp>
 #include <sgdicp/version.hpp>
 
 // sgdicp::tools links too: a pairs file written here reads back.

@@ -1,0 +1,191 @@
+#pragma once
+// Odometry over a sequence of scans: each frame (a cloud in its sensor's frame) is registered to
+// a local map of the frames before it, giving its pose T_first_frame (maps the frame's points
+// into the first frame's coordinates). The parts, after KISS-ICP (Vizzo et al., RA-L 2023):
+//   - a local VoxelMap (voxel_map.hpp), bounded in points per voxel and in radius around the
+//     sensor, updated incrementally;
+//   - a constant-velocity prediction (the last frame-to-frame motion repeated) as initial guess;
+//   - a correspondence threshold adapted to the observed deviation of the registrations from
+//     the prediction (AdaptiveThreshold);
+//   - any method of methods.hpp (SGD-ICP by default) as the registration step.
+// A frame whose registration fails (not converged, too few points, or a motion beyond the
+// physical bounds per frame) is reported as failed and gets the predicted pose. docs/odometry.md.
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sgdicp/core/point_cloud.hpp"
+#include "sgdicp/odometry/voxel_map.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/settings.hpp"
+
+namespace sgdicp {
+
+class ReferenceIndex;       // nearest_neighbor.hpp
+struct RegistrationResult;  // result.hpp
+
+/// The settings of the odometry pipeline (the registration step has its own: SgdSettings or
+/// BatchSettings). Lengths with a 0 default are derived from the first frame's extent (auto).
+struct OdometrySettings {
+  /// Points farther from the sensor are dropped; the map keeps voxels within this radius of the
+  /// current pose.
+  double max_range_m = 100.0;
+  /// Points closer to the sensor are dropped (the vehicle, the operator's hand).
+  double min_range_m = 0.0;
+  /// Side of the map's voxels; 0 = 1 % of the first frame's range (its 99th percentile point
+  /// distance from the sensor, at most max_range_m): 0.5-0.8 m on KITTI, 3-4 cm on a Kinect.
+  /// Frames are thinned to one point per half voxel for the map and per 1.5 voxels for the
+  /// registration.
+  double voxel_size_m = 0.0;
+  /// Points kept per voxel of the map.
+  std::size_t max_points_per_voxel = 20;
+  /// Correspondence threshold sigma before any motion has been observed; 0 = 2 voxels. The
+  /// registration's d_max is 3 sigma.
+  double initial_threshold_m = 0.0;
+  /// Deviations from the prediction smaller than this are not samples of the threshold (a
+  /// standing sensor would shrink it to nothing); 0 = voxel / 10.
+  double min_motion_m = 0.0;
+  /// Physical bounds of the motion between consecutive frames: a registration beyond either is
+  /// a failed frame.
+  double max_translation_per_frame_m = 5.0;
+  double max_rotation_per_frame_deg = 45.0;
+  /// Derive d_max from the observed deviations (true), or keep the registration settings' own
+  /// max_correspondence_distance (false; the CLI and Python set it when --max-distance is given).
+  bool adaptive_threshold = true;
+  /// Adam and RMSProp step a length per iteration (their learning rate, in scaled units): cap it
+  /// at a quarter of each frame's d_max, so the first steps cannot jump past every
+  /// correspondence (false: the settings' learning rate as is; the CLI and Python set it when
+  /// --learning-rate is given). docs/odometry.md.
+  bool step_within_threshold = true;
+
+  /// Throws InvalidSettingsError naming the first setting out of range (odometry_settings_table),
+  /// spelled as `names` says.
+  void validate(SettingNames names = SettingNames::field) const;
+  bool operator==(const OdometrySettings&) const = default;
+};
+
+/// One numeric setting of OdometrySettings as the CLI (--name) and Python (name with '_')
+/// spell it, with its range, unit and help: the one table both read.
+struct OdometrySetting {
+  std::string_view name;
+  bool integer;
+  ValueRange range;
+  std::string_view unit;
+  std::string_view help;
+  double (*get)(const OdometrySettings&);
+  void (*set)(OdometrySettings&, double);
+  [[nodiscard]] std::string spelled(SettingNames names) const;
+};
+[[nodiscard]] const std::vector<OdometrySetting>& odometry_settings_table();
+/// The setting called `name` ('_' may stand for '-'), or nullptr.
+[[nodiscard]] const OdometrySetting* find_odometry_setting(std::string_view name);
+
+/// The correspondence threshold sigma of KISS-ICP's eq. (4)-(5): the RMS, over the frames so far,
+/// of the deviation of each registration from its prediction, measured as the largest
+/// displacement it causes to a point within max_range: |dt| + 2 max_range sin(|dtheta| / 2).
+/// Deviations below min_motion are not counted; before the first counted one sigma is initial.
+class AdaptiveThreshold {
+ public:
+  AdaptiveThreshold(double initial_m, double min_motion_m, double max_range_m);
+  /// Adds the deviation T_prediction^-1 T_estimate of one registered frame.
+  void update(const Eigen::Matrix4d& deviation);
+  [[nodiscard]] double sigma_m() const;
+  [[nodiscard]] std::size_t samples() const noexcept { return samples_; }
+  /// The point displacement bound of a transform (metres), as used by update().
+  [[nodiscard]] static double displacement_m(const Eigen::Matrix4d& T, double max_range_m);
+
+ private:
+  double initial_m_, min_motion_m_, max_range_m_;
+  double sum_squares_ = 0.0;
+  std::size_t samples_ = 0;
+};
+
+/// What happened to one frame.
+struct FrameReport {
+  std::size_t index = 0;
+  Eigen::Matrix4d T_first_frame = Eigen::Matrix4d::Identity();
+  bool failed = false;     ///< the pose is the prediction, not a registration (see message)
+  bool converged = false;  ///< the registration's convergence test passed
+  /// The frame is identical to the previous one (a sensor delivering a frame twice, as 59 of the
+  /// 600 7-Scenes frames): it gets the previous pose and the motion model is kept, since the
+  /// data's answer (no motion) would stop the prediction.
+  bool repeated = false;
+  std::string message;  ///< why it failed, or the registration's stop message
+  std::size_t iterations = 0;
+  std::size_t source_points = 0;  ///< frame points registered (after cropping and thinning)
+  std::size_t map_points = 0;     ///< map points it was registered to
+  double inlier_ratio = 0.0;      ///< of the registration (result.hpp)
+  double inlier_rmse_m = 0.0;
+  double threshold_m = 0.0;     ///< adaptive d_max given (3 sigma), metres; 0 when fixed
+  double index_build_ms = 0.0;  ///< KD-tree over the map (plus normals / covariances)
+  double time_ms = 0.0;         ///< the whole frame: thinning, index, registration, map update
+};
+
+class Odometry {
+ public:
+  /// The registration step is `method` (methods.hpp) with `sgd` or `batch` as its settings.
+  /// Without the settings of the method's solver (`sgd` for the SGD methods, `batch` for the
+  /// batch ones), the defaults with the method's cost (apply_method_cost); given, they are
+  /// used as they are (their grid aside: the pipeline has its own), so apply the method's cost to
+  /// them before changing what you want (e.g. a coarse cost). Throws InvalidSettingsError for
+  /// invalid settings or method, or settings whose cost is not the method's.
+  explicit Odometry(const OdometrySettings& settings = {}, std::string_view method = "sgd",
+                    std::optional<SgdSettings> sgd = std::nullopt,
+                    std::optional<BatchSettings> batch = std::nullopt);
+  /// The settings of the registration step, as used.
+  [[nodiscard]] const SgdSettings& sgd_settings() const noexcept { return sgd_; }
+  [[nodiscard]] const BatchSettings& batch_settings() const noexcept { return batch_; }
+
+  /// Registers the next frame (points in its sensor frame) and returns its pose T_first_frame.
+  /// The first frame is the identity. A failed frame is reported (last_report().failed) and
+  /// gets the predicted pose; never throws for a frame's content (an empty frame fails).
+  Eigen::Matrix4d register_frame(const PointCloud& frame);
+
+  /// Records a frame that could not be read (a bad file): predicted pose, failed, `message`.
+  Eigen::Matrix4d skip_frame(const std::string& message);
+
+  [[nodiscard]] const std::vector<Eigen::Matrix4d>& poses() const noexcept { return poses_; }
+  [[nodiscard]] const std::vector<FrameReport>& reports() const noexcept { return reports_; }
+  [[nodiscard]] const VoxelMap* map() const noexcept { return map_ ? &*map_ : nullptr; }
+  [[nodiscard]] const OdometrySettings& settings() const noexcept { return settings_; }
+  /// The voxel size in use (the derived one once the first frame is in), metres.
+  [[nodiscard]] double voxel_size_m() const noexcept { return voxel_size_m_; }
+  [[nodiscard]] std::string_view method() const noexcept { return method_->name; }
+
+ private:
+  void start(const PointCloud& cropped);
+  [[nodiscard]] Eigen::Matrix4d predicted() const;
+  /// A frame identical to the previous one: the previous pose, the motion model kept.
+  Eigen::Matrix4d repeat_previous_pose(double started_ms);
+  /// The registration step of a frame to the map (d_max 3 sigma when adaptive).
+  [[nodiscard]] RegistrationResult align_to_map(const PointCloud& source,
+                                                const ReferenceIndex& index, double sigma_m,
+                                                const Eigen::Matrix4d& T_guess) const;
+  /// Takes the registration's pose into the report, or marks the frame failed when it did not
+  /// converge or moved beyond the bounds per frame.
+  void judge_registration(const RegistrationResult& r, const Eigen::Matrix4d& T_guess,
+                          FrameReport& report);
+  Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
+
+  OdometrySettings settings_;
+  const Method* method_;
+  SgdSettings sgd_;
+  BatchSettings batch_;
+  double voxel_size_m_ = 0.0;
+  std::optional<VoxelMap> map_;
+  std::optional<AdaptiveThreshold> threshold_;
+  Eigen::Matrix4d last_motion_ = Eigen::Matrix4d::Identity();  ///< T_{k-2}^-1 T_{k-1}
+  std::vector<Eigen::Vector3f> previous_points_;  ///< of the last frame, to spot a repeat
+  std::vector<Eigen::Matrix4d> poses_;
+  std::vector<FrameReport> reports_;
+};
+
+/// The points of `cloud` at a distance from the origin in [min_range_m, max_range_m].
+[[nodiscard]] PointCloud crop_range(const PointCloud& cloud, double min_range_m,
+                                    double max_range_m);
+
+}  // namespace sgdicp

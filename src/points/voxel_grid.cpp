@@ -1,0 +1,318 @@
+#include "points/voxel_table.hpp"
+
+#include <chrono>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "core/checks.hpp"
+#include "sgdicp/points/scaling.hpp"
+#include "sgdicp/points/voxel_grid.hpp"
+#include "util/parallel_chunks.hpp"
+
+namespace sgdicp {
+namespace detail {
+namespace {
+
+// voxel_size_for_count: counting passes at most, and the relative error in the count that
+// ends the search early (the count is a budget, not a contract).
+constexpr int kVoxelSearchPasses = 6;
+constexpr double kVoxelCountTolerance = 0.15;
+
+// The passes over raw points (the size search's counting, the thinning) hash and sum two fixed
+// halves of a cloud and merge them in order: with two threads the halves run at once, one
+// thread runs the same halves in turn, so first-seen order and every sum are the same for any
+// thread count. Smaller clouds are one part.
+constexpr std::size_t kMinPointsToSplit = std::size_t{1} << 15;
+
+struct PointRange {
+  std::size_t begin;
+  std::size_t end;
+};
+
+std::vector<PointRange> point_parts(std::size_t n) {
+  if (n < kMinPointsToSplit) return {{0, n}};
+  return {{0, n / 2}, {n / 2, n}};
+}
+
+// A pass that only counts and numbers voxels (Counted: the size search's, the thinning's first)
+// gives the same table for any split point: merge_later keeps first-seen order, and there are
+// no sums. So its split follows the measured cost. The first half of a scan can cost 2x the
+// second (near and far, dense and sparse parts of the scene: counting a KITTI scan's halves
+// took 0.94 and 0.48 ms), which left one thread waiting a third of each pass. Each calling thread
+// keeps the share of the points that its last counting pass would have split evenly
+// (counting_share).
+std::vector<PointRange> counting_parts(std::size_t n) {
+  if (n < kMinPointsToSplit) return {{0, n}};
+  const double share = std::clamp(counting_share(), 0.0, 1.0);
+  const auto split = static_cast<std::size_t>(share * static_cast<double>(n));
+  return {{0, split}, {split, n}};
+}
+
+// The share of `n` points at which the two parts' measured times `ms` would have been equal,
+// taking each part's cost per point as constant; kept within [1/8, 7/8] so that one odd pass
+// cannot leave a part nearly empty.
+void rebalance(const std::vector<PointRange>& parts, const std::vector<double>& ms, std::size_t n) {
+  if (parts.size() != 2 || !(ms[0] > 0.0 && ms[1] > 0.0)) return;
+  const double total = ms[0] + ms[1];
+  const double share = static_cast<double>(parts[0].end) / static_cast<double>(n);
+  const double even = ms[0] >= total / 2 ? share * (total / 2) / ms[0]
+                                         : share + (1.0 - share) * (total / 2 - ms[0]) / ms[1];
+  counting_share() = std::clamp(even, 0.125, 0.875);
+}
+
+// The table of the points in `range`; stops once it holds more than `limit` voxels. `expected`
+// sizes the hash table.
+template <class Voxel>
+VoxelTable<Voxel> table_of(const PointCloud& cloud, const VoxelGrid& grid, PointRange range,
+                           std::size_t expected, std::size_t limit, bool record) {
+  VoxelTable<Voxel> t{VoxelSlots(expected), {}, {}, {}};
+  if (record) t.point_slots.reserve(range.end - range.begin);
+  for (std::size_t i = range.begin; i < range.end; ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    const VoxelKey key = grid.key(p);
+    const std::size_t slot = t.slots.slot(key);
+    if (slot == t.voxels.size()) {
+      if (slot == limit) {
+        t.over_limit = true;
+        break;
+      }
+      t.keys.push_back(key);
+      t.voxels.emplace_back();
+    }
+    t.voxels[slot].add(p);
+    if (record) t.point_slots.push_back(static_cast<std::uint32_t>(slot));
+  }
+  if (t.over_limit) t.point_slots.clear();
+  return t;
+}
+
+// Where each of `keys` is in `slots` (kNone: not there), split over the threads as any pass
+// (resolve_threads): the look-ups only read the table (no re-hash: a Kinect frame's merge
+// 0.41 -> 0.27 ms on two threads).
+RecycledVector<std::size_t> look_up(const VoxelSlots& slots, const RecycledVector<VoxelKey>& keys,
+                                    std::size_t threads) {
+  RecycledVector<std::size_t> found(keys.size());
+  parallel_chunks(keys.size(), resolve_threads(threads, keys.size()),
+                  [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t s = begin; s < end; ++s) found[s] = slots.find(keys[s]);
+                  });
+  return found;
+}
+
+// Appends `later` (the table of the points after those of `t`) to `t`: its voxels in its own
+// first-seen order, sums added after t's, point slots renumbered. The new voxels are not
+// hashed into t.slots: nothing looks a voxel up once its table is complete.
+template <class Voxel>
+void merge_later(VoxelTable<Voxel>& t, VoxelTable<Voxel>&& later, std::size_t limit,
+                 std::size_t threads) {
+  t.over_limit = t.over_limit || later.over_limit;
+  if (t.over_limit) {
+    t.point_slots.clear();
+    return;
+  }
+  const RecycledVector<std::size_t> found = look_up(t.slots, later.keys, threads);
+  RecycledVector<std::uint32_t> renumbered(later.voxels.size());
+  for (std::size_t s = 0; s < later.voxels.size() && !t.over_limit; ++s) {
+    std::size_t slot = found[s];
+    if (slot == VoxelSlots::kNone) {
+      slot = t.voxels.size();
+      t.over_limit = slot == limit;
+      t.keys.push_back(later.keys[s]);
+      t.voxels.push_back(later.voxels[s]);
+    } else {
+      t.voxels[slot] += later.voxels[s];
+    }
+    renumbered[s] = static_cast<std::uint32_t>(slot);
+  }
+  if (t.over_limit) {
+    t.point_slots.clear();
+    return;
+  }
+  const std::size_t first = t.point_slots.size();
+  t.point_slots.resize(first + later.point_slots.size());
+  parallel_chunks(later.point_slots.size(), resolve_threads(threads, later.point_slots.size()),
+                  [&](std::size_t begin, std::size_t end) {
+                    for (std::size_t i = begin; i < end; ++i) {
+                      t.point_slots[first + i] = renumbered[later.point_slots[i]];
+                    }
+                  });
+}
+
+// The table of every point of the cloud, made in its parts on up to `threads` threads: fixed
+// halves (point_parts) where voxels sum their points, a measured split (counting_parts) where
+// they only count them on two threads or more.
+template <class Voxel>
+VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, std::size_t expected,
+                              std::size_t limit, bool record, std::size_t threads) {
+  // One thread makes the parts in turn: their split only moves the merge, so it stays fixed.
+  const bool counting = std::is_same_v<Voxel, Counted> && resolve_thread_count(threads) >= 2;
+  const std::vector<PointRange> parts =
+      counting ? counting_parts(cloud.size()) : point_parts(cloud.size());
+  std::vector<std::optional<VoxelTable<Voxel>>> tables(parts.size());
+  std::vector<double> ms(parts.size());
+  for_parts(parts.size(), threads, [&](std::size_t part) {
+    const auto start = std::chrono::steady_clock::now();
+    tables[part] = table_of<Voxel>(cloud, grid, parts[part], expected, limit, record);
+    ms[part] =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  });
+  if (counting) rebalance(parts, ms, cloud.size());
+  VoxelTable<Voxel> table = std::move(*tables.front());
+  if (record) table.point_slots.reserve(cloud.size());
+  for (std::size_t part = 1; part < parts.size(); ++part) {
+    merge_later(table, std::move(*tables[part]), limit, threads);
+  }
+  return table;
+}
+
+// accumulate_voxels over the voxels of a complete counting pass, reusing its hashing: each part
+// sums into its own array by slot, and the arrays are added in part order.
+template <class Voxel>
+VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted>&& counted,
+                                     std::size_t threads) {
+  const std::vector<PointRange> parts = point_parts(cloud.size());
+  std::vector<RecycledVector<Voxel>> sums(parts.size());
+  for_parts(parts.size(), threads, [&](std::size_t part) {
+    RecycledVector<Voxel>& voxels = sums[part];
+    voxels.resize(counted.keys.size());
+    for (std::size_t i = parts[part].begin; i < parts[part].end; ++i) {
+      voxels[counted.point_slots[i]].add(cloud.points[i]);
+    }
+  });
+  for (std::size_t part = 1; part < parts.size(); ++part) {
+    for (std::size_t s = 0; s < sums.front().size(); ++s) sums.front()[s] += sums[part][s];
+  }
+  return {std::move(counted.slots), std::move(counted.keys), std::move(sums.front()), {}};
+}
+
+}  // namespace
+
+// The voxels of a cloud with their sums. On two threads or more, a counting pass (its split
+// measured: counting_parts) numbers every point's voxel and the sums follow by slot in fixed
+// halves (accumulate_counted); on one, one pass hashes and sums. The sums are added in the same
+// order either way (each half's in point order, then the halves'), so the same table for any
+// thread count.
+template <class Voxel>
+VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
+                                    std::size_t threads) {
+  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
+  const std::size_t n = cloud.size();
+  constexpr std::size_t kNoLimit = std::numeric_limits<std::size_t>::max();
+  if (resolve_thread_count(threads) >= 2 && n >= kMinPointsToSplit &&
+      n <= std::numeric_limits<std::uint32_t>::max()) {
+    return accumulate_counted<Voxel>(
+        cloud, voxel_table<Counted>(cloud, grid, n / 8, kNoLimit, true, threads), threads);
+  }
+  return voxel_table<Voxel>(cloud, grid, n / 8, kNoLimit, false, threads);
+}
+
+namespace {
+
+// voxel_size_for_count on up to `threads` threads; `settled` (if not null) receives the counting
+// pass of the returned size when one counted it (the search ended within its tolerance), else
+// nullopt.
+double search_voxel_size(const PointCloud& cloud, std::size_t target_points, std::size_t threads,
+                         std::optional<VoxelTable<Counted>>* settled) {
+  if (settled != nullptr) settled->reset();
+  if (target_points == 0 || cloud.size() <= target_points) return 0.0;
+  const float largest = largest_coordinate(cloud);
+  // Occupied voxels fall as a power of the size, N(v) ~ v^-a: a ~ 2 on surfaces (every sensor's
+  // clouds), ~3 in volumes, ~1 on lines. Start from a surface filling the bulk box's diagonal
+  // square, then take secant steps in log-log space with the slope measured by the last two.
+  const BoundingBox& box = bulk_bounding_box(cloud).box;
+  const double diagonal = (box.max - box.min).cast<double>().norm();
+  if (!(diagonal > 0.0)) return 0.0;  // all points in one place: nothing to thin
+  // A grid fine enough for the bulk cannot index a point 1e20 times farther out (a spurious
+  // return robust scaling leaves out): such a cloud is used as it is.
+  const double finest = static_cast<double>(largest) / (kMaxVoxelIndex / 4.0);
+  if (diagonal / std::sqrt(static_cast<double>(target_points)) / 1e3 < finest) return 0.0;
+  const auto target = static_cast<double>(target_points);
+  const std::size_t limit = 8 * target_points;  // a count above says "far too small"
+  double size = diagonal / std::sqrt(target);
+  double previous_size = 0.0;
+  double previous_count = 0.0;
+  double slope = 2.0;
+  // Each point's slot is kept as 32 bits: a larger cloud is counted, not reused.
+  const bool keep = settled != nullptr && cloud.size() <= std::numeric_limits<std::uint32_t>::max();
+  for (int pass = 0; pass < kVoxelSearchPasses; ++pass) {
+    VoxelTable<Counted> counted =
+        voxel_table<Counted>(cloud, VoxelGrid(size, largest), target_points, limit, keep, threads);
+    const auto count = static_cast<double>(counted.over_limit ? limit + 1 : counted.keys.size());
+    if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) {
+      if (keep) *settled = std::move(counted);
+      break;
+    }
+    if (previous_size > 0.0 && count <= static_cast<double>(limit) &&
+        previous_count <= static_cast<double>(limit) && count != previous_count) {
+      slope =
+          std::clamp(std::log(previous_count / count) / std::log(size / previous_size), 0.5, 3.0);
+    }
+    previous_size = size;
+    previous_count = count;
+    size *= std::pow(count / target, 1.0 / slope);
+  }
+  return size;
+}
+
+}  // namespace
+
+void check_voxel_size(double voxel_size_m) {
+  if (!std::isfinite(voxel_size_m) || voxel_size_m <= 0.0) {
+    throw InvalidSettingsError("voxel size must be positive and finite, got " +
+                               format_number(voxel_size_m) + " m");
+  }
+}
+
+double& counting_share() {
+  thread_local double share = 0.5;
+  return share;
+}
+
+// The grid a registration thins `cloud` with (registration_voxel_size); `settled` as for
+// search_voxel_size.
+double grid_size(const PointCloud& cloud, double voxel_size_m, std::size_t downsample_to,
+                 std::size_t threads, std::optional<VoxelTable<Counted>>* settled) {
+  if (voxel_size_m > 0.0) return voxel_size_m;
+  if (cloud.has_normals() || cloud.has_covariances()) return 0.0;
+  return search_voxel_size(cloud, downsample_to, threads, settled);
+}
+
+// accumulate_voxels, reusing the hashing of the search's settling pass when there is one.
+template <class Voxel>
+VoxelTable<Voxel> accumulate(const PointCloud& cloud, double voxel_size_m, std::size_t threads,
+                             std::optional<VoxelTable<Counted>>& settled) {
+  return settled ? accumulate_counted<Voxel>(cloud, std::move(*settled), threads)
+                 : accumulate_voxels<Voxel>(cloud, voxel_size_m, threads);
+}
+
+template VoxelTable<Centroid> accumulate_voxels(const PointCloud&, double, std::size_t);
+template VoxelTable<Moments> accumulate_voxels(const PointCloud&, double, std::size_t);
+template VoxelTable<Centroid> accumulate(const PointCloud&, double, std::size_t,
+                                         std::optional<VoxelTable<Counted>>&);
+template VoxelTable<Moments> accumulate(const PointCloud&, double, std::size_t,
+                                        std::optional<VoxelTable<Counted>>&);
+
+}  // namespace detail
+
+PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m, std::size_t num_threads) {
+  if (num_threads > kMaxThreads) {
+    throw InvalidSettingsError("voxel_downsample: num_threads must be at most " +
+                               std::to_string(kMaxThreads) + " (0 = all cores), got " +
+                               std::to_string(num_threads));
+  }
+  return detail::centroids_of(
+      detail::accumulate_voxels<detail::Centroid>(cloud, voxel_size_m, num_threads).voxels,
+      cloud.origin_m);
+}
+
+double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {
+  return detail::search_voxel_size(cloud, target_points, 1, nullptr);
+}
+
+double registration_voxel_size(const PointCloud& cloud, double voxel_size_m,
+                               std::size_t downsample_to) {
+  return detail::grid_size(cloud, voxel_size_m, downsample_to, 1, nullptr);
+}
+
+}  // namespace sgdicp

@@ -1,0 +1,541 @@
+// The settings tables (settings.hpp): every setting of both solvers once, with its name, field,
+// range, unit and help, which the CLI, Python and docs/registration.md read.
+#include "sgdicp/registration/settings.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "sgdicp/core/threads.hpp"
+
+namespace sgdicp {
+
+// ---- the tables
+
+namespace detail {
+namespace {
+
+// Every distance in metres: a micrometre to a thousand kilometres (a 15 cm scan to a km map).
+constexpr ValueRange kMetresRange{1e-6, 1e6};
+
+template <typename T>
+constexpr SettingKind kind_of() {
+  if constexpr (std::is_same_v<T, bool>) {
+    return SettingKind::flag;
+  } else if constexpr (std::is_unsigned_v<T>) {
+    return SettingKind::count;
+  } else if constexpr (std::is_floating_point_v<T>) {
+    return SettingKind::real;
+  } else if constexpr (std::is_same_v<T, Distance>) {
+    return SettingKind::distance;
+  } else {
+    static_assert(std::is_enum_v<T>);
+    return SettingKind::choice;
+  }
+}
+
+template <typename T>
+SettingValue to_value(const T& v) {
+  if constexpr (kind_of<T>() == SettingKind::count) {
+    return static_cast<std::uint64_t>(v);
+  } else if constexpr (kind_of<T>() == SettingKind::choice) {
+    return std::string(enum_name(v));
+  } else {
+    return v;
+  }
+}
+
+template <typename T>
+T from_value(const SettingValue& v) {
+  if constexpr (kind_of<T>() == SettingKind::count) {
+    return static_cast<T>(std::get<std::uint64_t>(v));
+  } else if constexpr (kind_of<T>() == SettingKind::choice) {
+    return parse_enum<T>(std::get<std::string>(v));
+  } else {
+    return std::get<T>(v);
+  }
+}
+
+template <typename S, auto... Members>
+struct Field {
+  static auto& ref(S& s) { return (s.*....*Members); }
+  static const auto& ref(const S& s) { return (s.*....*Members); }
+  using Type = std::remove_cvref_t<decltype(ref(std::declval<S&>()))>;
+};
+
+// The description of one setting; `noun` names a choice's values in an unknown-name message.
+struct Describe {
+  std::string_view name;
+  std::string_view field;
+  ValueRange range{};
+  std::string_view unit{};
+  std::string_view help{};
+  bool keyword_only = false;
+};
+
+template <typename S, auto... Members>
+Setting<S> setting(const Describe& d) {
+  using F = Field<S, Members...>;
+  using T = typename F::Type;
+  Setting<S> s;
+  s.name = d.name;
+  s.field = d.field;
+  s.kind = kind_of<T>();
+  s.range = d.range;
+  s.metres_range = kMetresRange;
+  s.unit = d.unit;
+  s.help = d.help;
+  s.keyword_only = d.keyword_only;
+  if constexpr (kind_of<T>() == SettingKind::choice) {
+    s.choices = [] { return canonical_names<T>(); };
+  } else {
+    s.choices = nullptr;
+  }
+  s.get = [](const S& x) { return to_value(F::ref(x)); };
+  s.set = [](S& x, const SettingValue& v) { F::ref(x) = from_value<T>(v); };
+  return s;
+}
+
+}  // namespace
+}  // namespace detail
+
+namespace {
+
+using detail::Describe;
+using detail::setting;
+using S = SgdSettings;
+using B = BatchSettings;
+using O = OptimizerSettings;
+using C = ConvergenceSettings;
+using R = RefinementSettings;
+using N = NeighborhoodSettings;
+using U = UncertaintySettings;
+
+// Ranges (docs/registration.md explains each): wide enough for every real use, from a 15 cm
+// scan to a km-scale map, narrow enough that no value crashes, allocates absurdly or returns the
+// initial pose as if converged.
+constexpr double kUint64Max = 0x1p64;
+// A distance in scaled units: a millionth of the scene (below that, float32 coordinates cannot
+// resolve it) to ten scenes (the pose is declared diverged there).
+constexpr ValueRange kScaledRange{1e-6, 10.0};
+constexpr ValueRange kDecay{0.0, 1.0, false, true};  // [0, 1)
+// The fixed step is a gradient multiplier: large ones are legitimate on small gradients, and a
+// step that blows the pose up is reported as diverged.
+constexpr ValueRange kLearningRate{1e-6, 1e4};
+constexpr ValueRange kDamping{0.0, 100.0};
+constexpr ValueRange kTolerance{0.0, 0.01};
+constexpr ValueRange kTrim{0.01, 1.0};
+constexpr ValueRange kIterations{1.0, 1e9};
+constexpr ValueRange kNeighbors{3.0, 1000.0};
+constexpr ValueRange kFlatNeighbors{0.0, 1000.0};
+constexpr ValueRange kFlatness{0.0, 1.0 / 3.0};
+constexpr ValueRange kEvaluationPoints{0.0, 4294967295.0};
+constexpr ValueRange kThreads{0.0, static_cast<double>(kMaxThreads)};
+// A voxel side: 0 (no fixed grid) up to 1000 km; sizes too small for the coordinates are
+// refused when the grid is built (voxel indices beyond 2^62).
+constexpr ValueRange kVoxelSize{0.0, 1e6};
+constexpr ValueRange kDownsampleTo{0.0, 4294967295.0};
+
+// The shared texts of settings that both solvers have.
+constexpr std::string_view kMaxDistanceHelp = "Correspondence rejection distance d_max";
+constexpr std::string_view kKernelHelp = "Robust kernel on the pair residuals";
+constexpr std::string_view kKernelScaleHelp =
+    "Kernel scale c, the residual size where down-weighting starts";
+constexpr std::string_view kTrimHelp =
+    "Keep only this fraction of the pairs (per mini-batch for SGD, per iteration for batch "
+    "methods), the closest ones: trimmed ICP for partial overlap";
+constexpr std::string_view kVoxelSizeHelp =
+    "Thin both clouds to one point (the centroid) per voxel of this side before registering "
+    "(timed), 0 = the grid --downsample-to chooses";
+constexpr std::string_view kDownsampleToHelp =
+    "Without --voxel-size: the voxel grid that keeps about this many points of the reference "
+    "(chosen from the data, +-15 %), applied to both clouds; clouds with at most this many "
+    "points, or with normals or covariances given, are used as they are; 0 = no downsampling";
+constexpr std::string_view kThreadsHelp =
+    "Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs "
+    "the grid's reference normals, the SGD mini-batches' queries and the final statistics' on "
+    "a second thread), "
+    "0 = every core; the result is the same for any count";
+constexpr std::string_view kNeighborsHelp =
+    "Plane costs: neighbours per point (itself included) for normals and covariances";
+constexpr std::string_view kFlatNeighborsHelp =
+    "Plane costs: neighbours of a point whose nearest ones already lie flat (surface variation "
+    "at most --flatness): those alone give its normal and covariance, the others' come from "
+    "--neighbors; 0 = always --neighbors";
+constexpr std::string_view kFlatnessHelp =
+    "Plane costs: the largest surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2) of a "
+    "flat neighbourhood (see --flat-neighbors)";
+constexpr std::string_view kEvaluationHelp =
+    "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all";
+constexpr std::string_view kDegeneracyHelp =
+    "Check the final alignment for degenerate geometry (plane, corridor) and report it";
+constexpr std::string_view kRobustScalingHelp =
+    "Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's "
+    "bounding box of every point)";
+constexpr std::string_view kTraceHelp = "Record a per-iteration trace in the result";
+constexpr std::string_view kCostHelp =
+    "Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP)";
+
+Setting<S> optimizer_setting() {
+  Setting<S> s = setting<S, &S::optimizer, &O::type>(
+      {"optimizer",
+       "optimizer.type",
+       {},
+       {},
+       "Step rule of eq. 3 (sgd: fixed step; gauss-newton: A = inverse of the averaged "
+       "mini-batch Gauss-Newton matrix); also sets the learning rate to the rule's own unless "
+       "one is given"});
+  s.set = [](S& x, const SettingValue& v) {
+    x.optimizer.type = parse_enum<OptimizerType>(std::get<std::string>(v));
+    x.optimizer.learning_rate = default_learning_rate(x.optimizer.type, x.optimizer.momentum);
+  };
+  return s;
+}
+
+// Named, the cost is the cost of every stage, as a method named for its cost (methods.hpp); a
+// coarse-cost named after it (table order) sets the first stage's.
+Setting<S> cost_setting() {
+  Setting<S> s = setting<S, &S::cost>(
+      {"cost",
+       "cost",
+       {},
+       "",
+       "Cost of a pair in every stage (a coarse-cost given too sets the first stage's): "
+       "point-to-point (the paper), point-to-plane or plane-to-plane (GICP)",
+       true});
+  s.set = [](S& x, const SettingValue& v) {
+    x.cost = x.coarse_cost = parse_enum<CostType>(std::get<std::string>(v));
+  };
+  return s;
+}
+
+// The step rule and the mini-batch (the first: "optimizer" sets the learning rate).
+std::vector<Setting<S>> step_settings() {
+  return {
+      optimizer_setting(),
+      setting<S, &S::optimizer, &O::learning_rate>(
+          {"learning-rate", "optimizer.learning_rate", kLearningRate, "scaled units",
+           "Step size alpha (adaptive rules: a length per step; sgd, momentum: a gradient "
+           "multiplier; gauss-newton: a fraction of the Newton step)"}),
+      setting<S, &S::batch_size>({"batch-size",
+                                  "batch_size",
+                                  {1.0, 1e7},
+                                  "",
+                                  "Mini-batch size m, source points per iteration"}),
+      setting<S, &S::cap_batch_to_source>(
+          {"cap-batch-to-source",
+           "cap_batch_to_source",
+           {},
+           "",
+           "Small sources: cap m at 2 x source points / window (at least 32) so that a "
+           "convergence window sees each point about twice (false: m always, the paper)"}),
+      setting<S, &S::small_source_gauss_newton>(
+          {"small-source-gauss-newton",
+           "small_source_gauss_newton",
+           {},
+           "",
+           "Small sources (fewer than batch-size x window / 2 points): the coarse stage takes "
+           "Gauss-Newton steps while the optimizer is the default Adam (false: the optimizer "
+           "always, the paper)"}),
+      setting<S, &S::max_correspondence_distance>(
+          {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
+      setting<S, &S::max_iterations>(
+          {"max-iterations", "max_iterations", kIterations, "",
+           "Iteration limit (mini-batches); reaching it reports 'not converged'"}),
+      setting<S, &S::seed>({"seed",
+                            "seed",
+                            {0.0, kUint64Max},
+                            "",
+                            "Seed of the mini-batch sampler (same seed, same result)"}),
+      setting<S, &S::optimizer, &O::momentum>(
+          {"momentum", "optimizer.momentum", kDecay, "", "Momentum: velocity decay"}),
+      setting<S, &S::optimizer, &O::beta1>(
+          {"beta1", "optimizer.beta1", kDecay, "", "Adam: decay of the gradient mean"}),
+      setting<S, &S::optimizer, &O::beta2>(
+          {"beta2", "optimizer.beta2", kDecay, "", "Adam: decay of the squared-gradient mean"}),
+      setting<S, &S::optimizer, &O::rms_decay>({"rms-decay", "optimizer.rms_decay", kDecay, "",
+                                                "RMSProp: decay of the squared-gradient mean"}),
+      setting<S, &S::optimizer, &O::epsilon>({"epsilon",
+                                              "optimizer.epsilon",
+                                              {0.0, 1.0, true, false},
+                                              "scaled units",
+                                              "Adam/RMSProp: added to the gradient RMS"}),
+      setting<S, &S::optimizer, &O::hessian_decay>(
+          {"hessian-decay", "optimizer.hessian_decay", kDecay, "",
+           "Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton "
+           "matrices"}),
+      setting<S, &S::optimizer, &O::damping>(
+          {"damping", "optimizer.damping", kDamping, "",
+           "Gauss-Newton step: Levenberg damping, relative to the mean diagonal of the averaged "
+           "matrix (batch methods: the initial Levenberg-Marquardt damping)"}),
+  };
+}
+
+// When a stage, and the run, stop.
+std::vector<Setting<S>> stop_settings() {
+  return {
+      setting<S, &S::convergence, &C::window>(
+          {"window",
+           "convergence.window",
+           {8.0, 1e5},
+           "",
+           "Convergence: iterations per test window (a stage ends after a window whose mean "
+           "mini-batch gradient is not significantly non-zero); also the length of the final "
+           "iterate average"}),
+      setting<S, &S::convergence, &C::chi2>(
+          {"chi2",
+           "convergence.chi2",
+           {0.0, 1000.0, true, false},
+           "",
+           "Convergence: critical chi-square value (6 dof) of the Hotelling test on the "
+           "window's mean gradient; larger stops earlier"}),
+      setting<S, &S::convergence, &C::max_path_efficiency>(
+          {"path-efficiency",
+           "convergence.max_path_efficiency",
+           {0.0, 1.0, true, false},
+           "",
+           "Convergence: a stationary window's net displacement over its path length must be at "
+           "most this (1 = straight travel, ~0.2 = jitter)"}),
+      setting<S, &S::convergence, &C::translation_tolerance>(
+          {"translation-tolerance", "convergence.translation_tolerance", kTolerance, "scaled units",
+           "Convergence: a window whose steps each move the translation less than this also "
+           "ends a stage (batch methods: an iteration that moves it less converges)"}),
+      setting<S, &S::convergence, &C::rotation_tolerance>(
+          {"rotation-tolerance", "convergence.rotation_tolerance", kTolerance, "rad",
+           "Convergence: ... and the angles less than this (sum of |d roll|, |d pitch|, "
+           "|d yaw|; batch methods: rotation angle)"}),
+      setting<S, &S::refinement, &R::stages>(
+          {"refine-stages",
+           "refinement.stages",
+           {0.0, 100.0},
+           "",
+           "Refinement stages after the first stationary stage (0 = the paper's single "
+           "phase)"}),
+      setting<S, &S::refinement, &R::step_decay>({"step-decay",
+                                                  "refinement.step_decay",
+                                                  {0.01, 1.0},
+                                                  "",
+                                                  "Refinement: step-size multiplier per stage"}),
+      setting<S, &S::refinement, &R::distance_factor>(
+          {"distance-factor",
+           "refinement.distance_factor",
+           {1.0, 1000.0},
+           "",
+           "Refinement: new d_max = factor x median correspondence distance (below 1 it would "
+           "reject most pairs: use trim for that)"}),
+      setting<S, &S::refinement, &R::min_distance>({"min-distance", "refinement.min_distance",
+                                                    kScaledRange, "",
+                                                    "Refinement: lower bound of d_max"}),
+      setting<S, &S::refinement, &R::gauss_newton>(
+          {"refine-gauss-newton",
+           "refinement.gauss_newton",
+           {},
+           "",
+           "Refinement: the refinement stages take Gauss-Newton steps (the gauss-newton rule at "
+           "its own step, times the stage's multiplier) whatever the coarse stage's rule, "
+           "except with a robust kernel or trimming"}),
+      setting<S, &S::refinement, &R::settle_tolerance>(
+          {"settle-tolerance",
+           "refinement.settle_tolerance",
+           {0.0, 0.99},
+           "",
+           "Refinement: a refinement stage ends the run when the d_max it would hand on is "
+           "within this fraction of its own (the pairs have settled); 0 = run every stage"}),
+  };
+}
+
+// What is returned, and how pairs are weighed.
+std::vector<Setting<S>> result_and_pair_settings() {
+  return {
+      setting<S, &S::average_iterates>(
+          {"average",
+           "average_iterates",
+           {},
+           "",
+           "Return the mean of the window iterates of the final stage's stationary window "
+           "(true) or the last iterate (false)"}),
+      setting<S, &S::scaling_origin>(
+          {"scaling-origin",
+           "scaling_origin",
+           {},
+           "",
+           "Origin of the scaled space and pivot of the rotation (lower-corner, also spelled "
+           "corner: the paper, points in [0, 1]; center: points in [-0.5, 0.5])"}),
+      setting<S, &S::evaluation_points>(
+          {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
+      cost_setting(),
+      setting<S, &S::coarse_cost>(
+          {"coarse-cost",
+           "coarse_cost",
+           {},
+           "",
+           "Cost of the first (coarse) stage when refinement stages follow (the refinement "
+           "stages and the result use the method's cost): point-to-point keeps the paper's wide "
+           "basin"}),
+      setting<S, &S::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
+      setting<S, &S::kernel_scale>(
+          {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
+      setting<S, &S::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
+      setting<S, &S::neighborhood, &N::k>(
+          {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
+      setting<S, &S::neighborhood, &N::flat_k>(
+          {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
+      setting<S, &S::neighborhood, &N::flatness>(
+          {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
+      setting<S, &S::check_degeneracy>(
+          {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
+      setting<S, &S::voxel_size_m>({"voxel-size", "voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      setting<S, &S::downsample_to>(
+          {"downsample-to", "downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
+      setting<S, &S::robust_scaling>(
+          {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
+      setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
+  };
+}
+
+// The pose uncertainty of the result (docs/uncertainty.md).
+std::vector<Setting<S>> uncertainty_settings() {
+  return {
+      setting<S, &S::uncertainty, &U::method>(
+          {"uncertainty",
+           "uncertainty.method",
+           {},
+           "",
+           "Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the "
+           "residual variance), sgld (Bayesian ICP: Langevin samples) or svgd (Stein ICP: "
+           "particles, clustered into modes)"}),
+      setting<S, &S::uncertainty, &U::samples>(
+          {"uncertainty-samples", "uncertainty.samples", {2.0, 1e6}, "", "sgld: samples kept"}),
+      setting<S, &S::uncertainty, &U::burn_in>({"burn-in",
+                                                "uncertainty.burn_in",
+                                                {0.0, 1e7},
+                                                "",
+                                                "sgld: iterations discarded before the first "
+                                                "sample"}),
+      setting<S, &S::uncertainty, &U::thinning>(
+          {"thinning", "uncertainty.thinning", {1.0, 1e4}, "", "sgld: iterations per sample"}),
+      setting<S, &S::uncertainty, &U::step>(
+          {"sgld-step",
+           "uncertainty.step",
+           {1e-4, 1.0},
+           "",
+           "sgld: step size, as the contraction per iteration along every axis (in the space "
+           "whitened by the Laplace precision)"}),
+      setting<S, &S::uncertainty, &U::particles>(
+          {"particles", "uncertainty.particles", {1.0, 1e4}, "", "svgd: particles K"}),
+      setting<S, &S::uncertainty, &U::svgd_iterations>(
+          {"svgd-iterations",
+           "uncertainty.svgd_iterations",
+           {1.0, 1e6},
+           "",
+           "svgd: iterations, one mini-batch shared by every particle each"}),
+      setting<S, &S::uncertainty, &U::svgd_step>(
+          {"svgd-step",
+           "uncertainty.svgd_step",
+           {1e-4, 10.0},
+           "posterior std",
+           "svgd: Adam's last step (it decays geometrically from a fifth of the initial spread)"}),
+      setting<S, &S::uncertainty, &U::svgd_spread>(
+          {"svgd-spread",
+           "uncertainty.svgd_spread",
+           {1e-3, 1e9},
+           "posterior std",
+           "svgd: spread of the initial particles around the estimate, in Laplace standard "
+           "deviations (wide values reach other modes)"}),
+      setting<S, &S::uncertainty, &U::temper>(
+          {"temper",
+           "uncertainty.temper",
+           {},
+           "",
+           "Temper the likelihood by the measured correlation of the residuals (false: "
+           "residuals treated as independent, as the peers do)"}),
+      setting<S, &S::uncertainty, &U::block_size>(
+          {"block-size", "uncertainty.block_size", kScaledRange, "",
+           "Block side of the sandwich estimator that measures the correlation of residuals"}),
+  };
+}
+
+std::vector<Setting<S>> make_sgd_table() {
+  std::vector<Setting<S>> table = step_settings();
+  for (auto part : {stop_settings(), result_and_pair_settings(), uncertainty_settings()}) {
+    table.insert(table.end(), part.begin(), part.end());
+  }
+  return table;
+}
+
+std::vector<Setting<B>> make_batch_table() {
+  return {
+      setting<B, &B::max_correspondence_distance>(
+          {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
+      setting<B, &B::max_iterations>(
+          {"max-iterations", "max_iterations", kIterations, "",
+           "Iteration limit (passes over the source); reaching it reports 'not converged'"}),
+      setting<B, &B::initial_damping>(
+          {"damping", "initial_damping", kDamping, "",
+           "icp-plane, gicp: initial Levenberg-Marquardt damping, relative to the mean diagonal "
+           "of J^T J; 0 = Gauss-Newton"}),
+      setting<B, &B::translation_tolerance>(
+          {"translation-tolerance", "translation_tolerance", kTolerance, "scaled units",
+           "Converged when an iteration moves the translation less than this ..."}),
+      setting<B, &B::rotation_tolerance>({"rotation-tolerance", "rotation_tolerance", kTolerance,
+                                          "rad",
+                                          "... and the rotation less than this (rotation angle)"}),
+      setting<B, &B::evaluation_points>(
+          {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
+      setting<B, &B::cost>({"cost", "cost", {}, "", kCostHelp, true}),
+      setting<B, &B::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
+      setting<B, &B::kernel_scale>(
+          {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
+      setting<B, &B::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
+      setting<B, &B::neighborhood, &N::k>(
+          {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
+      setting<B, &B::neighborhood, &N::flat_k>(
+          {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
+      setting<B, &B::neighborhood, &N::flatness>(
+          {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
+      setting<B, &B::check_degeneracy>(
+          {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
+      setting<B, &B::voxel_size_m>({"voxel-size", "voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      setting<B, &B::downsample_to>(
+          {"downsample-to", "downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
+      setting<B, &B::robust_scaling>(
+          {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
+      setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
+  };
+}
+
+template <typename T>
+const Setting<T>* find_in(const std::vector<Setting<T>>& table, std::string_view name) {
+  for (const auto& s : table) {
+    if (detail::same_name(s.name, name)) return &s;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+const std::vector<Setting<SgdSettings>>& sgd_settings_table() {
+  static const std::vector<Setting<SgdSettings>> table = make_sgd_table();
+  return table;
+}
+
+const std::vector<Setting<BatchSettings>>& batch_settings_table() {
+  static const std::vector<Setting<BatchSettings>> table = make_batch_table();
+  return table;
+}
+
+const Setting<SgdSettings>* find_sgd_setting(std::string_view name) {
+  return find_in(sgd_settings_table(), name);
+}
+
+const Setting<BatchSettings>* find_batch_setting(std::string_view name) {
+  return find_in(batch_settings_table(), name);
+}
+
+}  // namespace sgdicp

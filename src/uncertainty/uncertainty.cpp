@@ -1,0 +1,524 @@
+#include "sgdicp/uncertainty/uncertainty.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <tuple>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include "sgdicp/solver/optimizer.hpp"
+#include "sgdicp/solver/sampler.hpp"
+#include "surfaces/point_surfaces.hpp"
+#include "util/stopwatch.hpp"
+
+namespace sgdicp {
+
+PoseMatrix se3_jacobian(const PoseVector& theta) {
+  const Eigen::Matrix3d r = rotation_from_rpy(theta[3], theta[4], theta[5]);
+  const auto d = rotation_derivatives(theta[3], theta[4], theta[5]);
+  PoseMatrix j = PoseMatrix::Zero();
+  j.topLeftCorner<3, 3>() = r.transpose();  // rho = R^T dt
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Matrix3d w = r.transpose() * d[k];  // skew(phi) to first order
+    j.block<3, 1>(3, 3 + k) << w(2, 1), w(0, 2), w(1, 0);
+  }
+  return j;
+}
+
+namespace {
+
+PoseVector pose_difference(const PoseVector& a, const PoseVector& b) {
+  PoseVector d = a - b;
+  for (int k = 3; k < 6; ++k) d[k] = wrap_angle(d[k]);
+  return d;
+}
+
+}  // namespace
+
+PoseMatrix pose_map_jacobian(const std::function<PoseVector(const PoseVector&)>& f,
+                             const PoseVector& x, double h) {
+  PoseMatrix j;
+  for (int k = 0; k < 6; ++k) {
+    PoseVector up = x, down = x;
+    up[k] += h;
+    down[k] -= h;
+    j.col(k) = pose_difference(f(up), f(down)) / (2.0 * h);
+  }
+  return j;
+}
+
+namespace {
+
+// The source indices grouped into cubic blocks of side block_m, in a fixed order (sorted keys),
+// so that sums over blocks do not depend on a hash table's order.
+std::vector<std::vector<std::uint32_t>> blocks_of(const PointCloud& source, double block_m) {
+  using Key = std::tuple<long long, long long, long long, std::uint32_t>;
+  std::vector<Key> keys;
+  keys.reserve(source.size());
+  for (std::uint32_t i = 0; i < source.size(); ++i) {
+    const Eigen::Vector3d p = source.points[i].cast<double>() / block_m;
+    keys.emplace_back(static_cast<long long>(std::floor(p.x())),
+                      static_cast<long long>(std::floor(p.y())),
+                      static_cast<long long>(std::floor(p.z())), i);
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::vector<std::uint32_t>> blocks;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    const bool same = i > 0 && std::get<0>(keys[i]) == std::get<0>(keys[i - 1]) &&
+                      std::get<1>(keys[i]) == std::get<1>(keys[i - 1]) &&
+                      std::get<2>(keys[i]) == std::get<2>(keys[i - 1]);
+    if (!same) blocks.emplace_back();
+    blocks.back().push_back(std::get<3>(keys[i]));
+  }
+  return blocks;
+}
+
+// Sums over every source point paired at the optimum (scaled space).
+struct FullPass {
+  PoseMatrix jtj = PoseMatrix::Zero();     // sum w J^T Omega J
+  PoseVector jte = PoseVector::Zero();     // sum w J^T Omega e
+  PoseMatrix blocks = PoseMatrix::Zero();  // sum over blocks of (block's jte)(block's jte)^T
+  double sum_rho = 0.0;                    // sum rho(e^T Omega e)
+  std::size_t pairs = 0;
+  std::size_t paired_blocks = 0;
+};
+
+// Point-to-point pairs of a block with the information of the surface, n n^T.
+CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std::uint32_t>& block,
+                             const PoseVector& theta, detail::PointSurfaces& surfaces) {
+  CostAccumulator cost(KernelType::none, 1.0, true);
+  const EulerPoseJacobian pose(theta);
+  const double k = p.scaling->scale();
+  const auto d_max_sq_m = static_cast<float>(p.max_distance * k * p.max_distance * k);
+  for (const std::uint32_t i : block) {
+    const Eigen::Vector3d s = p.scaling->to_scaled(p.source->points[i]);
+    const Eigen::Vector3d moved = pose.transform(s);
+    const auto nn = p.reference->nearest(p.scaling->to_metric(moved).cast<float>(), d_max_sq_m);
+    if (!nn) continue;
+    // The reference's own normal, or one of its kSurfaceNeighbors nearest points (zero, no
+    // information, where they span no plane).
+    const Eigen::Vector3d n = surfaces.normal(nn->index).cast<double>();
+    const Eigen::Vector3d r = p.scaling->to_scaled(p.reference->cloud().points[nn->index]);
+    cost.add(cost.plane_term(pose.jacobian(s), moved - r, n));
+  }
+  return cost;
+}
+
+FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
+                   const PoseVector& theta) {
+  FullPass out;
+  const bool surface = p.cost == CostType::point_to_point && p.reference != nullptr;
+  std::optional<detail::PointSurfaces> surfaces;
+  if (surface) surfaces.emplace(*p.reference, NeighborhoodSettings{.k = kSurfaceNeighbors});
+  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+    const CostAccumulator c =
+        surface ? surface_cost(p, block, theta, *surfaces) : p.batch_cost(block, theta, true);
+    if (c.pairs() == 0) continue;
+    const PoseVector g = 2.0 * c.gradient(1);
+    out.jtj += 2.0 * c.hessian(1);
+    out.jte += g;
+    out.blocks += g * g.transpose();
+    out.sum_rho += 4.0 * c.cost(1);
+    out.pairs += c.pairs();
+    ++out.paired_blocks;
+  }
+  return out;
+}
+
+// sum w J^T Omega e over every source point with the run's own pairing and cost.
+PoseVector run_cost_gradient(const UncertaintyProblem& p, const UncertaintySettings& s,
+                             const PoseVector& theta) {
+  PoseVector sum = PoseVector::Zero();
+  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+    sum += 2.0 * p.batch_cost(block, theta, false).gradient(1);
+  }
+  return sum;
+}
+
+PoseVector prior_information() {
+  PoseVector d;
+  d << PoseVector::Constant(0.0);
+  d.head<3>().setConstant(1.0 / (kPriorTranslationStd * kPriorTranslationStd));
+  d.tail<3>().setConstant(1.0 / (kPriorRotationStd * kPriorRotationStd));
+  return d;
+}
+
+// kappa = tr(H^-1 S) / (6 sigma^2): the mean factor by which the block sandwich H^-1 S H^-1
+// exceeds the covariance of independent residuals sigma^2 H^-1 (1 when they are independent).
+double correlation_factor(const FullPass& f, double sigma2) {
+  const auto b = static_cast<double>(f.paired_blocks);
+  if (b <= 6.0) return 1.0;
+  // The block gradients sum to (nearly) zero at the optimum: B / (B - 6) undoes that bias.
+  const PoseMatrix s = f.blocks * (b / (b - 6.0));
+  PoseMatrix h = f.jtj;
+  h.diagonal() += sigma2 * prior_information();  // bounded in unconstrained directions
+  const double kappa = h.ldlt().solve(s).trace() / (6.0 * sigma2);
+  return std::isfinite(kappa) ? std::max(1.0, kappa) : 1.0;
+}
+
+// Normal deviates from a fully specified engine and Box-Muller, so that a seed gives the same
+// chain with any standard library (std::normal_distribution is implementation-defined).
+class Gaussian {
+ public:
+  explicit Gaussian(std::uint64_t seed) : engine_(seed ^ 0x9e3779b97f4a7c15ULL) {}
+  double operator()() {
+    if (has_spare_) {
+      has_spare_ = false;
+      return spare_;
+    }
+    const double u1 = (static_cast<double>(engine_() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+    const double u2 = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
+    const double radius = std::sqrt(-2.0 * std::log(u1));
+    spare_ = radius * std::sin(2.0 * std::numbers::pi * u2);
+    has_spare_ = true;
+    return radius * std::cos(2.0 * std::numbers::pi * u2);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+struct Posterior {
+  PoseVector theta_hat;  // scaled
+  PoseVector jte_hat;    // full-data sum w J^T Omega e at theta_hat
+  double inv_variance;   // 1 / (sigma^2 tau)
+  PoseMatrix precision;  // H / (sigma^2 tau) + prior
+};
+
+// g_batch(theta): sum w J^T Omega e over a mini-batch with the run's own pairing and cost.
+PoseVector batch_gradient(const UncertaintyProblem& p, const std::vector<std::uint32_t>& batch,
+                          const PoseVector& theta) {
+  return 2.0 * p.batch_cost(batch, theta, false).gradient(1);
+}
+
+// The control variate's g_batch(theta_hat) of every mini-batch. When the batch cost is a sum over
+// its points (no trimming), each point's gradient at the optimum is paired once, and a batch's
+// is the sum of its points': one pairing per iteration instead of two (sgld), K instead of
+// K + 1 (svgd). Otherwise the batch is paired at theta_hat again.
+class OptimumGradients {
+ public:
+  OptimumGradients(const UncertaintyProblem& p, const PoseVector& theta_hat)
+      : p_(p), theta_hat_(theta_hat) {
+    if (!p.additive_batches) return;
+    per_point_.reserve(p.source->size());
+    std::vector<std::uint32_t> one(1);
+    for (std::uint32_t i = 0; i < p.source->size(); ++i) {
+      one[0] = i;
+      per_point_.push_back(batch_gradient(p, one, theta_hat));
+    }
+  }
+  [[nodiscard]] PoseVector operator()(const std::vector<std::uint32_t>& batch) const {
+    if (per_point_.empty()) return batch_gradient(p_, batch, theta_hat_);
+    PoseVector sum = PoseVector::Zero();
+    for (const std::uint32_t i : batch) sum += per_point_[i];
+    return sum;
+  }
+  // The full-data gradient at the optimum, when the points' gradients are known.
+  [[nodiscard]] std::optional<PoseVector> full() const {
+    if (per_point_.empty()) return std::nullopt;
+    PoseVector sum = PoseVector::Zero();
+    for (const PoseVector& g : per_point_) sum += g;
+    return sum;
+  }
+
+ private:
+  const UncertaintyProblem& p_;
+  PoseVector theta_hat_;
+  std::vector<PoseVector> per_point_;
+};
+
+// grad U at theta from one mini-batch, with the control variate of the optimum (Baker et al.
+// 2019): grad U(theta_hat) + N/m (g_batch(theta) - g_batch(theta_hat)), plus the prior's;
+// at_hat = g_batch(theta_hat).
+PoseVector energy_gradient(const UncertaintyProblem& p, const Posterior& post,
+                           const std::vector<std::uint32_t>& batch, const PoseVector& theta,
+                           const PoseVector& at_hat) {
+  const double n_over_m = static_cast<double>(p.source->size()) /
+                          static_cast<double>(std::min(p.batch_size, p.source->size()));
+  return (post.jte_hat + n_over_m * (batch_gradient(p, batch, theta) - at_hat)) *
+             post.inv_variance +
+         prior_information().cwiseProduct(theta - p.theta_init);
+}
+
+// The space whitened by the Laplace precision P = L L^T: z = L^T (theta - theta_hat), one unit
+// one posterior standard deviation along every axis, so that distances compare translation
+// (scaled units) and rotation (rad) on one scale; gradients map by grad_z = L^-1 grad_theta.
+struct Whitening {
+  PoseVector theta_hat;
+  Eigen::LLT<PoseMatrix> llt;
+  [[nodiscard]] PoseVector theta(const PoseVector& z) const {
+    return theta_hat + llt.matrixU().solve(z);
+  }
+  [[nodiscard]] PoseVector gradient(const PoseVector& grad_theta) const {
+    return llt.matrixL().solve(grad_theta);
+  }
+};
+
+// Pre-conditioned SGLD (Li et al. 2016, eq. 4 without the Gamma term) on the energy
+// U = sum rho / (2 sigma^2 tau) - log prior, whose gradient is estimated on a mini-batch with
+// the control variate of the optimum. The chain runs in the space whitened by the Laplace
+// precision, where the curvature is about the identity: RMSProp's diagonal alone leaves the
+// correlations between axes (KITTI's rotation and translation), and a step that suits the
+// stiffest axis then mixes the soft directions too slowly (measured: docs/uncertainty.md).
+std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                   const Posterior& post, const Whitening& white,
+                                   const OptimumGradients& at_hat) {
+  // RMSProp's mean square starts at its stationary value, the whitened curvature (E[(grad U)^2]
+  // = 1 for a Gaussian), so no warm-up is spent on it.
+  PoseVector mean_square = PoseVector::Ones();
+  // eps such that every axis contracts by `step` per iteration: eps sqrt(1) / 2.
+  const double eps = 2.0 * s.step;
+  constexpr double kDecay = 0.99;  // Li et al. 2016
+  EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
+  Gaussian normal(p.seed);
+  std::vector<std::uint32_t> batch;
+  std::vector<PoseVector> samples;
+  samples.reserve(s.samples);
+  PoseVector z = PoseVector::Zero();  // the estimate
+  const std::size_t iterations = s.burn_in + s.samples * s.thinning;
+  for (std::size_t it = 1; it <= iterations; ++it) {
+    sampler.next_batch(p.batch_size, batch);
+    const PoseVector grad =
+        white.gradient(energy_gradient(p, post, batch, white.theta(z), at_hat(batch)));
+    mean_square = kDecay * mean_square + (1.0 - kDecay) * grad.cwiseProduct(grad);
+    const PoseVector g = mean_square.cwiseSqrt().cwiseInverse();
+    for (int k = 0; k < 6; ++k) {
+      z[k] += -0.5 * eps * g[k] * grad[k] + std::sqrt(eps * g[k]) * normal();
+    }
+    if (it > s.burn_in && (it - s.burn_in) % s.thinning == 0) samples.push_back(white.theta(z));
+  }
+  return samples;
+}
+
+// The RBF bandwidth of the median heuristic (Liu and Wang 2016, section 5): h = med^2 /
+// log(K + 1), med the median pairwise distance, so that a particle's own term weighs about as
+// much as all the others together.
+double median_bandwidth(const std::vector<PoseVector>& z) {
+  std::vector<double> pairs;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    for (std::size_t j = i + 1; j < z.size(); ++j) pairs.push_back((z[i] - z[j]).squaredNorm());
+  }
+  if (pairs.empty()) return 1.0;  // one particle: any bandwidth gives k = 1
+  const auto mid = pairs.begin() + static_cast<std::ptrdiff_t>(pairs.size() / 2);
+  std::nth_element(pairs.begin(), mid, pairs.end());
+  return *mid > 0.0 ? *mid / std::log(static_cast<double>(z.size()) + 1.0) : 1.0;
+}
+
+// Particles closer than this belong to one mode (kModeLinkDistance, kModeLinkBandwidth), given
+// the median heuristic's bandwidth of the particles.
+double mode_link(double median_h) {
+  return std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_h));
+}
+
+// The Stein direction of every particle (Liu and Wang 2016, eq. 8): the kernel-weighted mean of
+// the particles' descent directions plus the kernel's gradient, which repels them from each
+// other. While the particles form one mode the bandwidth is the median heuristic's times
+// kSvgdBandwidthScale (its measurement in uncertainty.hpp); over several modes the median is
+// set by the distances between them, and a wider kernel would merge them.
+std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
+                                        const std::vector<PoseVector>& grads) {
+  const double median = median_bandwidth(z);
+  const bool one_mode = particle_modes(z, mode_link(median)).size() == 1;
+  const double h = one_mode ? kSvgdBandwidthScale * median : median;
+  std::vector<PoseVector> phi(z.size(), PoseVector::Zero());
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    for (std::size_t j = 0; j < z.size(); ++j) {
+      const double k = std::exp(-(z[i] - z[j]).squaredNorm() / h);
+      phi[i] += k * (-grads[j]) + (2.0 * k / h) * (z[i] - z[j]);
+    }
+    phi[i] /= static_cast<double>(z.size());
+  }
+  return phi;
+}
+
+// Stein ICP (Maken et al. 2022) in the whitened space, where the kernel's distances are taken.
+// The particles start at N(0, spread^2 I), the Laplace covariance inflated by spread^2. Returns z.
+std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                       const Posterior& post, const Whitening& white,
+                                       const OptimumGradients& optimum_gradients) {
+  EpochSampler sampler(static_cast<std::uint32_t>(p.source->size()), p.seed + 1);
+  Gaussian normal(p.seed);
+  std::vector<PoseVector> z(s.particles);
+  for (PoseVector& zi : z) {
+    for (int k = 0; k < 6; ++k) zi[k] = s.svgd_spread * normal();
+  }
+  std::vector<std::uint32_t> batch;
+  // One mini-batch per iteration for every particle (and one control-variate term for all).
+  const ParticleGradients gradients = [&](const std::vector<PoseVector>& zs,
+                                          std::vector<PoseVector>& grads) {
+    sampler.next_batch(p.batch_size, batch);
+    const PoseVector at_hat = optimum_gradients(batch);
+    for (std::size_t i = 0; i < zs.size(); ++i) {
+      grads[i] = white.gradient(energy_gradient(p, post, batch, white.theta(zs[i]), at_hat));
+    }
+  };
+  return stein_descent(std::move(z), gradients, s.svgd_iterations, kSvgdFirstStep * s.svgd_spread,
+                       s.svgd_step);
+}
+
+struct Moments {
+  PoseVector mean;
+  PoseMatrix covariance;
+};
+
+// Mean and covariance of reported poses, the angles averaged as offsets from `origin`.
+Moments moments_of(const std::vector<PoseVector>& poses, const PoseVector& origin) {
+  PoseVector mean_offset = PoseVector::Zero();
+  for (const PoseVector& x : poses) mean_offset += pose_difference(x, origin);
+  const auto n = static_cast<double>(poses.size());
+  mean_offset /= n;
+  Moments m{origin + mean_offset, PoseMatrix::Zero()};
+  for (int k = 3; k < 6; ++k) m.mean[k] = wrap_angle(m.mean[k]);
+  for (const PoseVector& x : poses) {
+    const PoseVector d = pose_difference(x, origin) - mean_offset;
+    m.covariance += d * d.transpose();
+  }
+  m.covariance /= std::max(1.0, n - 1.0);
+  return m;
+}
+
+void fill_from_samples(const UncertaintyProblem& p, const std::vector<PoseVector>& chain,
+                       const PoseVector& reported_hat, RegistrationResult& result) {
+  result.samples.clear();
+  for (const PoseVector& theta : chain) result.samples.push_back(p.to_reported(theta));
+  const Moments m = moments_of(result.samples, reported_hat);
+  result.sample_mean = m.mean;
+  result.covariance = m.covariance;
+}
+
+// svgd: the particles as samples, their modes (each averaged from its own first particle, so
+// that a mode half a turn away is not wrapped), and the heaviest mode's covariance.
+void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVector>& z,
+                         const Whitening& white, const PoseVector& reported_hat,
+                         RegistrationResult& result) {
+  std::vector<PoseVector> thetas;
+  for (const PoseVector& zi : z) thetas.push_back(white.theta(zi));
+  fill_from_samples(p, thetas, reported_hat, result);
+  result.modes.clear();
+  // Particles the kernel cannot tell apart (k > 0.94) share their gradients and move as one.
+  for (const auto& members : particle_modes(z, mode_link(median_bandwidth(z)))) {
+    std::vector<PoseVector> poses;
+    for (const std::size_t i : members) poses.push_back(result.samples[i]);
+    const Moments m = moments_of(poses, poses.front());
+    result.modes.push_back({static_cast<double>(members.size()) / static_cast<double>(z.size()),
+                            m.mean, m.covariance});
+  }
+  result.covariance = result.modes.front().covariance;
+}
+
+}  // namespace
+
+std::vector<PoseVector> stein_descent(std::vector<PoseVector> z,
+                                      const ParticleGradients& energy_gradients,
+                                      std::size_t iterations, double step_first, double step_last) {
+  OptimizerSettings adam;
+  adam.type = OptimizerType::adam;
+  adam.learning_rate = 1.0;  // the schedule's step is the multiplier
+  std::vector<Optimizer> optimizers(z.size(), Optimizer(adam));
+  std::vector<PoseVector> grads(z.size(), PoseVector::Zero());
+  const double last = static_cast<double>(std::max<std::size_t>(iterations, 2) - 1);
+  for (std::size_t it = 0; it < iterations; ++it) {
+    const double step =
+        step_first * std::pow(step_last / step_first, static_cast<double>(it) / last);
+    energy_gradients(z, grads);
+    const std::vector<PoseVector> phi = stein_direction(z, grads);
+    // Adam minimises along its argument: -phi ascends the Stein direction.
+    for (std::size_t i = 0; i < z.size(); ++i) {
+      z[i] += optimizers[i].step(-phi[i], PoseMatrix::Zero(), step);
+    }
+  }
+  return z;
+}
+
+std::vector<std::vector<std::size_t>> particle_modes(const std::vector<PoseVector>& z,
+                                                     double link) {
+  const std::size_t n = z.size();
+  std::vector<bool> taken(n, false);
+  std::vector<std::vector<std::size_t>> modes;
+  for (std::size_t first = 0; first < n; ++first) {
+    if (taken[first]) continue;
+    taken[first] = true;
+    std::vector<std::size_t> mode{first};
+    // Breadth-first over the particles within `link` of a member.
+    for (std::size_t q = 0; q < mode.size(); ++q) {
+      for (std::size_t j = 0; j < n; ++j) {
+        if (!taken[j] && (z[mode[q]] - z[j]).norm() < link) {
+          taken[j] = true;
+          mode.push_back(j);
+        }
+      }
+    }
+    std::sort(mode.begin(), mode.end());
+    modes.push_back(std::move(mode));
+  }
+  std::stable_sort(modes.begin(), modes.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return modes;
+}
+
+PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings& s,
+                                PoseVector theta_hat, RegistrationResult& result) {
+  if (s.method == UncertaintyType::none) return theta_hat;
+  const detail::Stopwatch clock;
+  // SGD stops within the noise ball of its mini-batch gradient, which is wider than the
+  // posterior: Gauss-Newton steps on every pair bring the estimate to the full-data optimum
+  // that the covariance describes (measured: docs/uncertainty.md).
+  FullPass full = full_pass(p, s, theta_hat);
+  for (int step = 0; step < kPolishSteps && full.pairs > 6; ++step) {
+    PoseMatrix h = full.jtj;
+    h.diagonal() += 1e-9 * h.trace() * PoseVector::Ones() + 1e-12 * prior_information();
+    theta_hat -= h.ldlt().solve(full.jte);
+    full = full_pass(p, s, theta_hat);
+  }
+  result.uncertainty_pairs = full.pairs;
+  const auto residuals = static_cast<double>(full.pairs * residuals_per_pair(p.cost));
+  const PoseVector reported_hat = p.to_reported(theta_hat);
+  if (residuals <= 6.0 || !(full.sum_rho > 0.0)) {
+    result.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
+    result.covariance_se3 = result.covariance;
+    result.message += "; no uncertainty: too few pairs at the optimum";
+    return theta_hat;
+  }
+  const double sigma2 = full.sum_rho / (residuals - 6.0);  // scaled units^2
+  result.residual_sigma_m = std::sqrt(sigma2) * p.scale_m;
+  result.correlation_factor = correlation_factor(full, sigma2);
+  const double tau = s.temper ? result.correlation_factor : 1.0;
+  Posterior post{theta_hat, full.jte, 1.0 / (sigma2 * tau), full.jtj / (sigma2 * tau)};
+  post.precision.diagonal() += prior_information();
+  if (s.method == UncertaintyType::laplace) {
+    const PoseMatrix jm = pose_map_jacobian(p.to_reported, theta_hat);
+    const PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
+    result.covariance = jm * cov * jm.transpose();
+  } else {
+    const OptimumGradients at_hat(p, theta_hat);
+    // The control variate needs the full-data gradient of the energy the chain samples, the
+    // run's own cost (point-to-point: not the surface information's).
+    if (const auto full_gradient = at_hat.full()) {
+      post.jte_hat = *full_gradient;
+    } else if (p.cost == CostType::point_to_point) {
+      post.jte_hat = run_cost_gradient(p, s, theta_hat);
+    }
+    const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
+    if (s.method == UncertaintyType::sgld) {
+      fill_from_samples(p, sgld_chain(p, s, post, white, at_hat), reported_hat, result);
+    } else {
+      fill_from_particles(p, svgd_particles(p, s, post, white, at_hat), white, reported_hat,
+                          result);
+    }
+  }
+  result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
+  const PoseMatrix js = se3_jacobian(reported_hat);
+  result.covariance_se3 = js * result.covariance * js.transpose();
+  result.uncertainty_ms = clock.elapsed_ms();
+  return theta_hat;
+}
+
+}  // namespace sgdicp
