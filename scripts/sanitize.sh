@@ -11,7 +11,9 @@
 #         (the only std::jthread pool of the library), the voxel passes' block cache and block
 #         sweep on two threads, and `sgdicp bench --jobs 2`.
 # Both use RelWithDebInfo at -O1 (sanitized -O0 ran the suite several times slower; -O1 keeps
-# the stacks readable). The load and soak tests run a fifth and a tenth of their work when
+# the stacks readable) with -g1: line tables and function names, all a sanitizer's stack needs
+# (a sanitized registration.cpp compiled in 75 s with -g1 against 400 s with -g on a loaded
+# 2-core machine). The load and soak tests run a fifth and a tenth of their work when
 # sanitized (tests/test_stress.cpp). Builds use ${SANITIZE_JOBS:-2} jobs.
 # Measured under ASan+UBSan (shared 2-vCPU machine, load average 11-15): test_io 11 s,
 # cli_tests 79 s (8 s unsanitized); the builds took far longer there than they will on an idle
@@ -22,7 +24,7 @@ mode=${1:-all}
 jobs=${SANITIZE_JOBS:-2}
 
 configure() {  # configure DIR FLAGS
-  cmake -S . -B "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
+  cmake -S . -B "$1" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \
     -DCMAKE_CXX_FLAGS="$2 -fno-omit-frame-pointer" -DCMAKE_EXE_LINKER_FLAGS="$2" \
     -DCMAKE_SHARED_LINKER_FLAGS="$2" -DSGDICP_WARNINGS_AS_ERRORS=ON -DSGDICP_BUILD_PYTHON=OFF \
     -DSGDICP_BUILD_BENCHMARKS=OFF >/dev/null
