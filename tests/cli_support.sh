@@ -1,3 +1,6 @@
+# shellcheck shell=bash
+# The variables set here are used by the scripts that source it.
+# shellcheck disable=SC2034
 # Shared by the end-to-end tests of the sgdicp command-line tool (cli_test.sh,
 # cli_register_test.sh, cli_bench_test.sh), which source it after `set -u`. Reads
 #   SGDICP_BIN          the sgdicp executable

@@ -6,7 +6,7 @@
 # Prints one line per check and a final "N passed, M failed"; exits 1 on any failure.
 set -u
 
-# shellcheck source=cli_support.sh
+# shellcheck source-path=SCRIPTDIR source=cli_support.sh
 source "$(dirname "${BASH_SOURCE[0]}")/cli_support.sh"
 
 # --- help -------------------------------------------------------------------------------------
