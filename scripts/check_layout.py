@@ -18,8 +18,8 @@ import sys
 from pathlib import Path
 
 MAX_LINES = 700
-SIZE_CHECKED = ("src", "include", "apps", "python/src", "python/sgd_icp")
-SOURCE_SUFFIXES = {".cpp", ".hpp", ".h", ".py"}
+SIZE_CHECKED = ("src", "include", "apps", "python", "tests", "bench", "eval", "fuzz", "scripts")
+SOURCE_SUFFIXES = {".cpp", ".hpp", ".h", ".py", ".sh"}
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.MULTILINE)
 
 
