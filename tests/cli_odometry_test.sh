@@ -6,46 +6,10 @@
 # Prints one line per check and a final "N passed, M failed"; exits 1 on any failure.
 set -u
 
-BIN="${SGDICP_BIN:-}"
-SHARED="${SGDICP_SHARED_DATA:-}"
 DEMO="${SGDICP_DEMO_DATA:-}"
-passed=0
-failed=0
-pass() {
-  echo "PASS: $1"
-  passed=$((passed + 1))
-}
-fail() {
-  echo "FAIL: $1"
-  failed=$((failed + 1))
-}
-finish() {
-  echo "${passed} passed, ${failed} failed"
-  [ "$failed" -eq 0 ] || exit 1
-  exit 0
-}
-[ -x "$BIN" ] || {
-  fail "SGDICP_BIN ('${BIN}') is not an executable"
-  finish
-}
-tmp="$(mktemp -d "${TMPDIR:-/tmp}/sgdicp_odometry_test.XXXXXX")" || exit 1
-trap 'rm -rf "$tmp"' EXIT
-rc=0
-run() {
-  "$BIN" "$@" >"$tmp/out" 2>"$tmp/err"
-  rc=$?
-}
-# expect_error NAME PATTERN ARGS...: nonzero exit, stderr matching PATTERN (extended regex).
-expect_error() {
-  local name="$1" pattern="$2"
-  shift 2
-  run "$@"
-  if [ "$rc" -ne 0 ] && grep -Eqi -- "$pattern" "$tmp/err"; then
-    pass "$name"
-  else
-    fail "$name (exit $rc): $(head -c 400 "$tmp/err")"
-  fi
-}
+# The check functions, $tmp and `run`, shared with the other CLI tests.
+# shellcheck source=tests/cli_support.sh
+. "$(dirname "$0")/cli_support.sh"
 
 # A sequence of one cloud seen four times: every pose is the identity, within 2 cm (the frame
 # thinned to 1.5 voxels is registered to the map's half voxels: their centroids differ by ~1 cm).

@@ -1,7 +1,7 @@
 # shellcheck shell=bash
 # The variables set here are used by the scripts that source it.
 # shellcheck disable=SC2034
-# Shared by the end-to-end tests of the sgdicp command-line tool (cli_test.sh,
+# Shared by the end-to-end tests of the sgdicp command-line tool (cli_test.sh, cli_odometry_test.sh,
 # cli_register_test.sh, cli_bench_test.sh), which source it after `set -u`. Reads
 #   SGDICP_BIN          the sgdicp executable
 #   SGDICP_SHARED_DATA  the shared data folder (checks on real data are skipped when absent)
