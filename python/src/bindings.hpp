@@ -1,8 +1,12 @@
 #pragma once
 // Shared pieces of the Python module sgd_icp._core: conversions between NumPy arrays and the
-// library's types, the typed parsing of Python values, and the settings bindings.
+// library's types, the typed parsing of Python values, the types that several parts of the module
+// use (the shared reference index, the result as Python sees it), and each part's bind function.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -10,10 +14,12 @@
 #include <pybind11/pybind11.h>
 #include <Eigen/Core>
 
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/methods.hpp"
-#include "sgdicp/point_cloud.hpp"
-#include "sgdicp/registration.hpp"
+#include "sgdicp/core/point_cloud.hpp"
+#include "sgdicp/core/result.hpp"
+#include "sgdicp/index/nearest_neighbor.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/registration.hpp"
 
 namespace sgdicp::python {
 
@@ -57,7 +63,7 @@ struct ConvertedCloud {
 /// A new (4, 4) float64 array.
 [[nodiscard]] py::array_t<double> array_from_matrix(const Eigen::Matrix4d& matrix);
 
-// ---- Python values (settings.cpp)
+// ---- Python values (keywords.cpp)
 
 /// The Python type name of a value, for error messages.
 [[nodiscard]] std::string type_name(const py::handle& value);
@@ -70,12 +76,30 @@ struct ConvertedCloud {
 /// A CostType or its name ("point-to-plane" or "point_to_plane"); InvalidSettingsError for an
 /// unknown name, TypeError for another type.
 [[nodiscard]] CostType cost_from_object(const py::handle& value, std::string_view name);
+/// A bound enum E (OptimizerType, ScalingOrigin, CostType, KernelType, UncertaintyType or
+/// Distance::Unit) or one of its names; InvalidSettingsError for an unknown name, TypeError for
+/// another type.
+template <typename E>
+[[nodiscard]] E enum_from_object(const py::handle& value, std::string_view name);
+/// A Distance; TypeError for anything else.
+[[nodiscard]] Distance distance_from_object(const py::handle& value, std::string_view name);
+/// The keyword of a setting of the settings table: its name with '_' for '-' (the CLI's option).
+[[nodiscard]] std::string keyword_of(std::string_view name);
 
-// ---- settings (settings.cpp)
+// ---- settings (settings.cpp: the classes; keywords.cpp: the keyword overrides;
+// settings_docs.cpp: the docstrings from the settings table)
 
 /// Binds Distance, DistanceUnit, OptimizerType, ScalingOrigin and the settings classes
-/// (Settings, BatchSettings and their parts).
+/// (Settings, BatchSettings and their parts), then documents them (document_settings).
 void bind_settings(py::module_& m);
+
+/// Gives every attribute that the library's settings tables describe its docstring from its table
+/// entry (help, unit, range, keyword, default); the classes bind those with an empty docstring.
+void document_settings(py::module_& m);
+
+/// A value as Python writes it, for repr and "Default X." (which the package tests evaluate):
+/// enums as Class.member, arrays as tuples.
+[[nodiscard]] std::string python_literal(const py::object& value);
 
 /// `base` with the flat keyword overrides of docs/python.md applied (the names of the CLI's
 /// options), then validated. Throws TypeError for an unknown keyword or a value of the wrong
@@ -95,6 +119,102 @@ void bind_settings(py::module_& m);
 [[nodiscard]] std::string keyword_summary(const py::module_& core, Solver solver,
                                           std::string_view indent);
 
+// ---- reference indexes (reference_index.cpp)
+
+/// A ReferenceIndex shared by the Python object and every registration that uses it, so
+/// it outlives a `del` of the Python object while a registration runs in another thread. It is
+/// never changed after construction (reference normals and covariances are estimated there), so
+/// any number of threads can use it at once.
+struct SharedIndex {
+  ReferenceIndex index;
+  std::size_t non_finite_dropped = 0;
+  double build_ms = 0.0;
+};
+
+/// How a reference index is built from its cloud (with the GIL released by build_index).
+using IndexBuilder = std::function<ReferenceIndex(PointCloud)>;
+
+/// Builds the index with `build`, with the GIL released, and times it.
+[[nodiscard]] std::shared_ptr<SharedIndex> build_index(ConvertedCloud&& converted,
+                                                       const IndexBuilder& build);
+
+/// The error of check_reference_prepared, in the words of the Python API.
+void check_prepared(const SharedIndex& shared, CostType cost);
+
+/// Binds ReferenceIndex.
+void bind_reference_index(py::module_& m);
+
+// ---- results as Python sees them: NumPy arrays and plain values (results.cpp)
+
+struct Trace {
+  py::array_t<std::int64_t> iteration;
+  py::array_t<std::int64_t> points_processed;
+  py::array_t<double> T_reference_source;
+  py::array_t<double> step_size;
+  py::array_t<double> max_distance_m;
+  py::array_t<std::int64_t> inliers;
+  py::array_t<double> cost;
+};
+
+/// One mode of the svgd particles (PoseMode), its arrays as numpy.
+struct Mode {
+  double weight = 0.0;
+  py::array_t<double> mean;        // (6,)
+  py::array_t<double> covariance;  // (6, 6)
+};
+
+struct Result {
+  RegistrationResult fields;  ///< the C++ result (its trace moved into `trace`)
+  py::array_t<double> T_reference_source;
+  double build_ms = 0.0;
+  std::size_t source_non_finite_dropped = 0;
+  std::size_t reference_non_finite_dropped = 0;
+  Trace trace;
+  py::array_t<double> covariance;      // (6, 6)
+  py::array_t<double> covariance_se3;  // (6, 6)
+  py::array_t<double> samples;         // (K, 6)
+  py::array_t<double> sample_mean;     // (6,)
+  py::list modes;                      // of Mode
+};
+
+/// The Python result of a C++ result (its trace and samples moved into arrays).
+[[nodiscard]] Result make_result(RegistrationResult r);
+
+/// Binds Trace, PoseMode and RegistrationResult.
+void bind_results(py::module_& m);
+
+// ---- registration (registration.cpp)
+
+/// A --method of the CLI (methods.hpp), by name.
+[[nodiscard]] const Method& method_from_object(const py::handle& value);
+
+/// The reference index of a registration, as its settings say: reference_index_for (the
+/// library's one rule: voxel grid, threads, and the normals or covariances a batch cost needs in
+/// the index), and the cost a given index must be prepared for (batch methods; the SGD methods
+/// estimate what they lack during the run: none).
+struct ReferenceNeeds {
+  std::optional<CostType> cost;
+  IndexBuilder build;
+};
+
+/// What the reference index that register() builds for an array reference holds, for the same
+/// method, settings and overrides.
+[[nodiscard]] ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
+                                             const py::kwargs& overrides);
+
+/// Binds register (its docstring lists the keywords of the settings table: after bind_settings).
+void bind_registration(py::module_& m);
+
+// ---- file I/O (io.cpp)
+
+/// Binds ReadResult, read_point_cloud, read_points, read_transform, read_pairs and write_points.
+void bind_io(py::module_& m);
+
+// ---- metrics (metrics.cpp)
+
+/// Binds translation_error, rotation_error_geodesic and rotation_error_euler_sum.
+void bind_metrics(py::module_& m);
+
 // ---- preprocessing (preprocessing.cpp)
 
 /// Binds voxel_downsample, random_downsample, estimate_normals and estimate_covariances.
@@ -112,7 +232,7 @@ void bind_depth(py::module_& m);
 
 // ---- the module (module.cpp)
 
-/// Defines everything of sgd_icp._core in m.
+/// Defines everything of sgd_icp._core in m: the exceptions, then each part above.
 void define_module(py::module_& m);
 
 }  // namespace sgdicp::python

@@ -1,220 +1,25 @@
-// Settings classes of sgd_icp (the C++ SgdSettings with the same names and defaults) and the flat
-// keyword overrides shared by Settings(...), Settings.paper(...), Settings.replace(...) and
-// register(...).
-#include <algorithm>
-#include <array>
-#include <optional>
+// Settings classes of sgd_icp (the C++ SgdSettings and BatchSettings with the same names and
+// defaults, their parts and enums) with value semantics. Their attributes' docstrings come from
+// the library's settings table (settings_docs.cpp), their keyword overrides from keywords.cpp.
 #include <string>
-#include <string_view>
 #include <type_traits>
-#include <utility>
-#include <vector>
 
 #include <pybind11/native_enum.h>
 
 #include "bindings.hpp"
-#include "sgdicp/batch_icp.hpp"
-#include "sgdicp/error.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
 
 namespace sgdicp::python {
 namespace {
 
 using namespace pybind11::literals;
 
-// ---- enums from Python values (the enum itself or one of its names, enum_names.hpp)
-
-// The enum value if `value` is an instance of the bound enum E.
-template <typename E>
-std::optional<E> as_enum(const py::handle& value) {
-  py::detail::make_caster<E> caster;
-  if (!caster.load(value, /*convert=*/false)) return std::nullopt;
-  return py::detail::cast_op<E>(caster);
-}
-
-// The Python class of each bound enum, for messages.
-constexpr std::string_view python_class(OptimizerType) {
-  return "OptimizerType";
-}
-constexpr std::string_view python_class(ScalingOrigin) {
-  return "ScalingOrigin";
-}
-constexpr std::string_view python_class(CostType) {
-  return "CostType";
-}
-constexpr std::string_view python_class(KernelType) {
-  return "KernelType";
-}
-constexpr std::string_view python_class(UncertaintyType) {
-  return "UncertaintyType";
-}
-constexpr std::string_view python_class(Distance::Unit) {
-  return "DistanceUnit";
-}
-
-// "'a', 'b', 'c'": the names of E for a message.
-template <typename E>
-std::string quoted_names() {
-  std::string out;
-  for (const auto name : canonical_names<E>()) {
-    out += (out.empty() ? "'" : ", '") + std::string(name) + "'";
-  }
-  return out;
-}
-
-template <typename E>
-E enum_from_object(const py::handle& value, std::string_view name) {
-  if (const auto e = as_enum<E>(value)) return *e;
-  if (py::isinstance<py::str>(value)) return parse_enum<E>(value.cast<std::string>());
-  throw py::type_error(std::string(name) + " must be a " + std::string(python_class(E{})) +
-                       " or one of " + quoted_names<E>() + ", got " + type_name(value));
-}
-
-Distance distance_from_object(const py::handle& value, std::string_view name) {
-  if (py::isinstance<Distance>(value)) return value.cast<Distance>();
-  throw py::type_error(std::string(name) +
-                       " must be a Distance, e.g. Distance.metres(1.0) or Distance.scaled(0.5), "
-                       "got " +
-                       type_name(value));
-}
-
-// ---- the flat keyword overrides: the names of the settings table (settings.hpp) with '_' for
-// '-', i.e. the CLI's options
-
-// A distance given as a number takes the unit of max_distance_unit; a Distance keeps its own.
-Distance distance_or_number(const py::handle& value, Distance::Unit unit, std::string_view name) {
-  if (py::isinstance<Distance>(value)) return value.cast<Distance>();
-  return Distance{as_real(value, name), unit};
-}
-
-// A keyword's Python value as the value of its setting.
-template <typename S>
-SettingValue value_from_object(const Setting<S>& s, const py::handle& value, Distance::Unit unit,
-                               std::string_view keyword) {
-  switch (s.kind) {
-    case SettingKind::count:
-      return as_count(value, keyword);
-    case SettingKind::real:
-      return as_real(value, keyword);
-    case SettingKind::flag:
-      return as_bool(value, keyword);
-    case SettingKind::distance:
-      return distance_or_number(value, unit, keyword);
-    case SettingKind::choice:
-      break;
-  }
-  // Any of the enum's members (by its name) or one of its names.
-  static const py::object enum_type = py::module_::import("enum").attr("Enum");
-  if (py::isinstance(value, enum_type)) return value.attr("name").cast<std::string>();
-  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
-  std::string names;
-  for (const auto name : s.choices())
-    names += (names.empty() ? "'" : ", '") + std::string(name) + "'";
-  throw py::type_error(std::string(keyword) + " must be one of " + names +
-                       " (or the enum member), got " + type_name(value));
-}
-
-std::string keyword_of(std::string_view name) {
-  std::string keyword(name);
-  std::replace(keyword.begin(), keyword.end(), '-', '_');
-  return keyword;
-}
-
-// Names a reader of the Settings attributes may try, and the keyword that means it.
-constexpr std::array<std::pair<std::string_view, std::string_view>, 14> kSuggestions{{
-    {"voxel_size_m", "voxel_size"},
-    {"max_correspondence_distance", "max_distance"},
-    {"max_path_efficiency", "path_efficiency"},
-    {"average_iterates", "average"},
-    {"stages", "refine_stages"},
-    {"refinement_stages", "refine_stages"},
-    {"type", "optimizer"},
-    {"optimizer_type", "optimizer"},
-    {"lr", "learning_rate"},
-    {"unit", "max_distance_unit"},
-    {"trim_ratio", "trim"},
-    {"k", "neighbors"},
-    {"neighborhood", "neighbors"},
-    {"method", "cost"},
-}};
-
-template <typename S>
-std::string keyword_list(const std::vector<Setting<S>>& table) {
-  std::string list = "max_distance_unit";
-  for (const auto& s : table) list += ", " + keyword_of(s.name);
-  return list;
-}
-
-[[noreturn]] void unknown_keyword(const std::string& name) {
-  std::string message = "unknown setting '" + name + "'";
-  for (const auto& [alias, keyword] : kSuggestions) {
-    if (name == alias) message += " (did you mean '" + std::string(keyword) + "'?)";
-  }
-  throw py::type_error(message +
-                       "; the keyword settings are: " + keyword_list(sgd_settings_table()));
-}
-
-[[noreturn]] void not_a_batch_keyword(const std::string& name, std::string_view method) {
-  const bool sgd_only = find_sgd_setting(name) != nullptr && name.find('-') == std::string::npos;
-  std::string message = sgd_only ? "setting '" + name + "' applies to the SGD methods only, not to "
-                                 : "unknown setting '" + name + "' for ";
-  message += method.empty() ? std::string("BatchSettings")
-                            : "the batch method '" + std::string(method) + "'";
-  throw py::type_error(message +
-                       "; the batch keyword settings are: " + keyword_list(batch_settings_table()));
-}
-
-// Applies the keywords of `overrides` that name a setting of `table`, in table order (so that
-// optimizer= sets the learning rate before learning_rate= overrides it), with the unit of
-// max_distance_unit for distances given as numbers, then validates.
-template <typename S>
-S apply_keywords(S s, const py::dict& overrides, const std::vector<Setting<S>>& table) {
-  Distance::Unit unit = Distance::Unit::scaled;
-  const bool unit_given = overrides.contains("max_distance_unit");
-  if (unit_given)
-    unit = enum_from_object<Distance::Unit>(overrides["max_distance_unit"], "max_distance_unit");
-  bool numeric_distance = false;
-  for (const auto& setting : table) {
-    const std::string keyword = keyword_of(setting.name);
-    if (!overrides.contains(keyword)) continue;
-    const py::handle value = overrides[keyword.c_str()];
-    const SettingValue v = value_from_object(setting, value, unit, keyword);
-    numeric_distance = numeric_distance ||
-                       (setting.kind == SettingKind::distance && !py::isinstance<Distance>(value));
-    check_range(setting, v, SettingNames::python);
-    setting.set(s, v);
-  }
-  if (unit_given && !numeric_distance) {
-    std::vector<std::string> distances;
-    for (const auto& setting : table) {
-      if (setting.kind == SettingKind::distance) distances.push_back(keyword_of(setting.name));
-    }
-    std::string names;
-    for (std::size_t i = 0; i < distances.size(); ++i) {
-      names += (i == 0 ? "" : i + 1 == distances.size() ? " and " : ", ") + distances[i];
-    }
-    throw InvalidSettingsError("max_distance_unit applies to " + names +
-                               " given as numbers, and none is");
-  }
-  s.validate(SettingNames::python);
-  return s;
-}
-
 // ---- repr and equality
 
 std::string repr(const Distance& d) {
   return std::string(d.unit == Distance::Unit::metres ? "Distance.metres(" : "Distance.scaled(") +
          std::string(py::repr(py::float_(d.value))) + ")";
-}
-
-// A value as Python writes it, for repr and "Default X." (which the package tests evaluate):
-// enums as Class.member, arrays as tuples.
-std::string python_literal(const py::object& value) {
-  static const py::object enum_type = py::module_::import("enum").attr("Enum");
-  if (py::isinstance(value, enum_type)) {
-    return py::str("{}.{}").format(py::type::handle_of(value).attr("__name__"), value.attr("name"));
-  }
-  if (py::hasattr(value, "tolist")) return py::repr(py::tuple(value.attr("tolist")()));
-  return py::repr(value);
 }
 
 // "Class(attribute=value, ...)" over the properties the class binds, in binding order, so that a
@@ -235,8 +40,9 @@ std::string attributes_repr(const py::handle& self) {
 }
 
 // The attributes that the library's settings tables describe (settings.hpp) are bound with an
-// empty docstring here: document_attributes() sets each from its table entry (help, unit,
-// range, keyword, default), so that the text has one source. The others are written here.
+// empty docstring here: document_settings() (settings_docs.cpp) sets each from its table entry
+// (help, unit, range, keyword, default), so that the text has one source. The others are written
+// here.
 
 // Value semantics for every settings class: ==, repr, copy.copy and copy.deepcopy.
 template <typename T>
@@ -297,76 +103,6 @@ void def_distance(py::class_<Class>& c, const char* name, Distance Class::*membe
       [member, name](Class& s, const py::handle& v) { s.*member = distance_from_object(v, name); },
       doc);
 }
-
-}  // namespace
-
-std::string type_name(const py::handle& value) {
-  return Py_TYPE(value.ptr())->tp_name;
-}
-
-std::uint64_t as_count(const py::handle& value, std::string_view name) {
-  if (PyBool_Check(value.ptr()) || !PyIndex_Check(value.ptr())) {
-    throw py::type_error(std::string(name) + " must be an integer, got " + type_name(value));
-  }
-  const auto index = py::reinterpret_steal<py::int_>(PyNumber_Index(value.ptr()));
-  if (!index) throw py::error_already_set();
-  if (index < py::int_(0)) {
-    throw InvalidSettingsError(std::string(name) + " must be >= 0, got " +
-                               std::string(py::str(index)));
-  }
-  const unsigned long long v = PyLong_AsUnsignedLongLong(index.ptr());
-  if (PyErr_Occurred()) {
-    PyErr_Clear();  // beyond 64 bits: never wrapped around
-    throw InvalidSettingsError(std::string(name) + " must be at most 2^64-1, got " +
-                               std::string(py::str(index)));
-  }
-  return v;
-}
-
-double as_real(const py::handle& value, std::string_view name) {
-  if (PyBool_Check(value.ptr()) || !PyNumber_Check(value.ptr())) {
-    throw py::type_error(std::string(name) + " must be a number, got " + type_name(value));
-  }
-  const double v = PyFloat_AsDouble(value.ptr());
-  if (PyErr_Occurred()) throw py::error_already_set();
-  return v;
-}
-
-bool as_bool(const py::handle& value, std::string_view name) {
-  if (PyBool_Check(value.ptr())) return value.ptr() == Py_True;
-  static const py::object numpy_bool = py::module_::import("numpy").attr("bool_");
-  if (py::isinstance(value, numpy_bool)) return value.cast<bool>();
-  throw py::type_error(std::string(name) + " must be True or False, got " + type_name(value));
-}
-
-CostType cost_from_object(const py::handle& value, std::string_view name) {
-  return enum_from_object<CostType>(value, name);
-}
-
-SgdSettings with_overrides(SgdSettings s, const py::dict& overrides) {
-  for (const auto& [key, value] : overrides) {
-    const std::string name = py::str(key);
-    if (name != "max_distance_unit" &&
-        (name.find('-') != std::string::npos || !find_sgd_setting(name))) {
-      unknown_keyword(name);
-    }
-  }
-  return apply_keywords(std::move(s), overrides, sgd_settings_table());
-}
-
-BatchSettings with_batch_overrides(BatchSettings s, const py::dict& overrides,
-                                   std::string_view method) {
-  for (const auto& [key, value] : overrides) {
-    const std::string name = py::str(key);
-    if (name != "max_distance_unit" &&
-        (name.find('-') != std::string::npos || !find_batch_setting(name))) {
-      not_a_batch_keyword(name, method);
-    }
-  }
-  return apply_keywords(std::move(s), overrides, batch_settings_table());
-}
-
-namespace {
 
 void bind_enums(py::module_& m) {
   // Native Python enums (enum.Enum): the stubs can say so, and they pickle and compare as usual.
@@ -724,106 +460,7 @@ void bind_batch_settings(py::module_& m) {
   def_value_methods(batch);
 }
 
-// The Python class holding a setting's attribute, by the part of its C++ member before the dot.
-std::string class_of(std::string_view field, std::string_view top) {
-  const auto dot = field.find('.');
-  if (dot == std::string_view::npos) return std::string(top);
-  const std::string_view part = field.substr(0, dot);
-  if (part == "optimizer") return "OptimizerSettings";
-  if (part == "convergence") return "ConvergenceSettings";
-  if (part == "refinement") return "RefinementSettings";
-  if (part == "uncertainty") return "UncertaintySettings";
-  return "NeighborhoodSettings";
-}
-
-// The docstring of a setting's attribute: the table's help, range and unit, and the default read
-// from a default-constructed `defaults`.
-template <typename S>
-std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
-  py::object value = defaults;
-  std::string_view rest = s.field;
-  for (auto dot = rest.find('.'); dot != std::string_view::npos; dot = rest.find('.')) {
-    value = value.attr(std::string(rest.substr(0, dot)).c_str());
-    rest = rest.substr(dot + 1);
-  }
-  value = value.attr(std::string(rest).c_str());
-  std::string doc(s.help);
-  switch (s.kind) {
-    case SettingKind::count:
-    case SettingKind::real:
-      doc += (s.unit.empty() ? ", in " : ", " + std::string(s.unit) + " in ") + s.range.to_string();
-      break;
-    case SettingKind::distance:
-      doc += ", a Distance in " + s.range.to_string() + " scaled units or " +
-             s.metres_range.to_string() + " m";
-      break;
-    case SettingKind::choice:
-      doc += " (" + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
-             " or one of its names)";
-      break;
-    case SettingKind::flag:
-      break;
-  }
-  return doc + ". Keyword " + keyword_of(s.name) + "=. Default " + python_literal(value) + ".";
-}
-
-// Gives every attribute of the settings table its docstring from the table (settings.hpp).
-template <typename S>
-void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, const char* top) {
-  const py::object defaults = m.attr(top)();
-  const py::object property = py::module_::import("builtins").attr("property");
-  for (const auto& s : table) {
-    const std::string cls_name = class_of(s.field, top);
-    if (cls_name != top && std::string_view(top) == "BatchSettings") continue;  // nested: SGD's
-    const py::object cls = m.attr(cls_name.c_str());
-    const std::string field(s.field);
-    const std::string attribute =
-        field.substr(field.find('.') == std::string::npos ? 0 : field.find('.') + 1);
-    const py::object old = cls.attr("__dict__")[attribute.c_str()];
-    std::string doc = attribute_doc(s, defaults);
-    // A part of Settings documents Settings' value; say so where its own default differs.
-    if (cls_name != top) {
-      const std::string own = python_literal(cls().attr(attribute.c_str()));
-      if (doc.substr(doc.rfind("Default ") + 8) != own + ".") {
-        doc += " (That is Settings()'s; a " + cls_name + "() of its own has " + own + ".)";
-      }
-    }
-    py::setattr(cls, attribute.c_str(),
-                property(old.attr("fget"), old.attr("fset"), old.attr("fdel"), doc));
-  }
-}
-
-template <typename S>
-std::string summary_of(const std::vector<Setting<S>>& table, const py::object& defaults,
-                       std::string_view indent) {
-  std::string out;
-  std::string line(indent);
-  for (const auto& s : table) {
-    const std::string doc = attribute_doc(s, defaults);
-    const std::string value = doc.substr(doc.rfind("Default ") + 8, std::string::npos);
-    std::string item = keyword_of(s.name) + " (" + value.substr(0, value.size() - 1);
-    if (s.kind == SettingKind::count || s.kind == SettingKind::real) {
-      item += ", " + s.range.to_string();
-    }
-    item += ")";
-    if (&s != &table.back()) item += ",";
-    if (line.size() + item.size() + 1 > 96 && line.size() > indent.size()) {
-      out += line + "\n";
-      line = std::string(indent);
-    }
-    line += (line.size() > indent.size() ? " " : "") + item;
-  }
-  return out + line;
-}
-
 }  // namespace
-
-std::string keyword_summary(const py::module_& core, Solver solver, std::string_view indent) {
-  if (solver == Solver::sgd) {
-    return summary_of(sgd_settings_table(), core.attr("Settings")(), indent);
-  }
-  return summary_of(batch_settings_table(), core.attr("BatchSettings")(), indent);
-}
 
 void bind_settings(py::module_& m) {
   bind_enums(m);
@@ -834,8 +471,7 @@ void bind_settings(py::module_& m) {
   bind_uncertainty(m);
   bind_sgd_settings(m);
   bind_batch_settings(m);
-  document_attributes(m, sgd_settings_table(), "Settings");
-  document_attributes(m, batch_settings_table(), "BatchSettings");
+  document_settings(m);
 }
 
 }  // namespace sgdicp::python

@@ -1,0 +1,213 @@
+// sgd_icp.register: SGD-ICP or a batch method on two clouds (arrays, Open3D clouds or a
+// ReferenceIndex), with a settings object and the flat keyword overrides; its docstring.
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "bindings.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/methods.hpp"
+#include "sgdicp/registration/registration.hpp"
+
+namespace sgdicp::python {
+
+using namespace pybind11::literals;
+
+/// A --method of the CLI (methods.hpp), by name.
+const Method& method_from_object(const py::handle& value) {
+  if (!py::isinstance<py::str>(value)) {
+    throw py::type_error("method must be a str (" + method_list() + "), got " + type_name(value));
+  }
+  return method_from_string(value.cast<std::string>());
+}
+
+namespace {
+
+/// A copy of `settings` (a Settings), or the defaults for None.
+SgdSettings settings_or_default(const py::handle& settings, const Method& method) {
+  if (settings.is_none()) return SgdSettings{};
+  if (!py::isinstance<SgdSettings>(settings)) {
+    throw py::type_error("settings must be a sgd_icp.Settings or None, got " + type_name(settings) +
+                         (py::isinstance<BatchSettings>(settings)
+                              ? " (a BatchSettings is for method='icp', 'icp-plane' or 'gicp'; "
+                                "method='" +
+                                    std::string(method.name) + "' takes a Settings)"
+                              : std::string()));
+  }
+  return settings.cast<SgdSettings>();
+}
+
+/// A copy of `settings` (a BatchSettings), or the defaults for None.
+BatchSettings batch_settings_or_default(const py::handle& settings, const Method& method) {
+  if (settings.is_none()) return BatchSettings{};
+  if (!py::isinstance<BatchSettings>(settings)) {
+    throw py::type_error("settings must be a sgd_icp.BatchSettings or None for the batch method '" +
+                         std::string(method.name) + "', got " + type_name(settings));
+  }
+  return settings.cast<BatchSettings>();
+}
+
+template <typename Settings>
+ReferenceNeeds needs_of(const Settings& s, bool cost_in_index) {
+  return {cost_in_index ? std::optional<CostType>(s.cost) : std::nullopt,
+          [s](PointCloud cloud) { return reference_index_for(std::move(cloud), s); }};
+}
+
+/// Registration with either solver: the index (given, or built as `needs` says), then
+/// `run(index)` with the GIL released.
+template <typename Run>
+Result register_with(const ConvertedCloud& src, const py::handle& reference,
+                     const ReferenceNeeds& needs, Run run) {
+  std::shared_ptr<const SharedIndex> index;
+  double build_ms = 0.0;
+  if (py::isinstance<SharedIndex>(reference)) {
+    index = reference.cast<std::shared_ptr<SharedIndex>>();  // keeps it alive during the run
+    if (needs.cost) check_prepared(*index, *needs.cost);
+  } else {
+    auto built =
+        build_index(cloud_from_array(reference, "reference", NonFinite::drop), needs.build);
+    build_ms = built->build_ms;
+    index = std::move(built);
+  }
+
+  const RegistrationResult r = [&] {
+    const py::gil_scoped_release release;
+    return run(index->index);
+  }();
+  Result out = make_result(r);
+  out.build_ms = build_ms;
+  out.source_non_finite_dropped = src.non_finite_dropped;
+  out.reference_non_finite_dropped = index->non_finite_dropped;
+  return out;
+}
+
+/// The settings of a method with the user's settings object and keyword overrides.
+SgdSettings sgd_settings_of(const Method& m, const py::handle& settings,
+                            const py::kwargs& overrides) {
+  SgdSettings base = settings_or_default(settings, m);
+  BatchSettings unused;
+  apply_method_cost(m, base, unused);
+  return with_overrides(base, overrides);
+}
+BatchSettings batch_settings_of(const Method& m, const py::handle& settings,
+                                const py::kwargs& overrides) {
+  BatchSettings base = batch_settings_or_default(settings, m);
+  base.cost = *m.cost;
+  return with_batch_overrides(base, overrides, std::string(m.name));
+}
+
+Result register_clouds(const py::handle& source, const py::handle& reference,
+                       const py::handle& init, const py::handle& settings, const py::handle& method,
+                       const py::kwargs& overrides) {
+  const Method& m = method_from_object(method);
+  if (m.cost && overrides.contains("cost")) {
+    throw InvalidSettingsError("method='" + std::string(m.name) +
+                               "' sets the cost; drop cost= (or use method='sgd' with cost=)");
+  }
+  const auto T_init = [&] {
+    return init.is_none() ? Eigen::Matrix4d::Identity().eval() : matrix_from_array(init, "init");
+  };
+  if (m.solver == Solver::sgd) {
+    const SgdSettings s = sgd_settings_of(m, settings, overrides);
+    const Eigen::Matrix4d T = T_init();
+    const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+    return register_with(src, reference, needs_of(s, false), [&](const ReferenceIndex& index) {
+      return align(src.cloud, index, s, T);
+    });
+  }
+  const BatchSettings b = batch_settings_of(m, settings, overrides);
+  const Eigen::Matrix4d T = T_init();
+  const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+  return register_with(src, reference, needs_of(b, true), [&](const ReferenceIndex& index) {
+    return align_batch(src.cloud, index, b, T);
+  });
+}
+
+// ---- docstrings
+
+constexpr const char* kRegisterDocTemplate =
+    R"doc(Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
+
+Returns a RegistrationResult whose T_reference_source (4x4, float64, metres) maps source points
+into the reference frame: p_ref = R @ p_src + t.
+
+Parameters
+----------
+source : (N, 3) float32 or float64 array, metres
+    The cloud that moves. Any memory layout (C, Fortran, strided slices). It is copied once into
+    the library's float32 storage (float64 georeferenced coordinates, e.g. UTM, are stored from an
+    origin near the cloud, exactly: docs/io.md); rows with a NaN or infinite coordinate are dropped
+    and counted (result.source_non_finite_dropped).
+reference : (M, 3) array like `source`, or ReferenceIndex
+    The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
+    also from several threads at once; an array builds one for this call (result.build_ms),
+    with the normals or covariances the cost needs.
+init : (4, 4) array or None, default None (identity)
+    Initial T_reference_source; must be rigid.
+settings : Settings, BatchSettings or None, default None
+    The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
+    the batch methods (None = BatchSettings(), whose cost the method sets).
+method : str, default 'sgd'
+    The CLI's --method: 'sgd' (SGD-ICP with the settings' cost, point-to-plane by default,
+    point-to-point with Settings.paper()), 'sgd-point' / 'sgd-plane' / 'sgd-gicp' (SGD-ICP on
+    point-to-point / point-to-plane / plane-to-plane), 'icp' (batch
+    point-to-point, closed-form SVD step), 'icp-plane' (batch point-to-plane) or 'gicp' (batch
+    plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
+    error). An unknown name raises InvalidSettingsError.
+**overrides
+    Flat keyword settings applied on top of `settings`, named like the CLI's options (the
+    library's settings table), each with its default and valid range. A distance given as a number
+    is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
+    optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
+    For the batch methods (any other keyword raises TypeError):
+@BATCH@.
+    For the SGD methods:
+@SGD@.
+    See docs/python.md for the settings each one sets.
+
+The GIL is released during the registration (and the KD-tree build), so registrations in
+several Python threads run in parallel.
+
+Raises
+------
+InvalidInputError (ValueError)
+    A wrong shape or dtype, no finite points, fewer source points than batch_size, a non-rigid
+    init, a ReferenceIndex without the normals or covariances of a batch method's cost (build
+    it with ReferenceIndex(points, cost=...); the SGD methods estimate what they use).
+InvalidSettingsError (ValueError)
+    An invalid setting or method name.
+TypeError
+    An unknown keyword, a keyword of the other solver, or a value of the wrong type.
+)doc";
+
+// kRegisterDocTemplate with the keyword lists of both solvers filled in.
+std::string register_doc(const py::module_& m) {
+  std::string doc = kRegisterDocTemplate;
+  const auto fill = [&](const std::string& marker, const std::string& text) {
+    doc.replace(doc.find(marker), marker.size(), text);
+  };
+  fill("@BATCH@", keyword_summary(m, Solver::batch, "    "));
+  fill("@SGD@", keyword_summary(m, Solver::sgd, "    "));
+  return doc;
+}
+
+}  // namespace
+
+/// What the reference index that register_clouds builds for an array reference holds, for the
+/// same method, settings and overrides.
+ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
+                               const py::kwargs& overrides) {
+  if (m.solver == Solver::sgd) return needs_of(sgd_settings_of(m, settings, overrides), false);
+  return needs_of(batch_settings_of(m, settings, overrides), true);
+}
+
+void bind_registration(py::module_& m) {
+  // The keyword lists come from the settings table; the docstring must outlive the module.
+  static const std::string doc = register_doc(m);
+  m.def("register", &register_clouds, doc.c_str(), "source"_a, "reference"_a, "init"_a = py::none(),
+        "settings"_a = py::none(), "method"_a = "sgd");
+}
+
+}  // namespace sgdicp::python

@@ -1,0 +1,132 @@
+// The library's settings table (settings.hpp) as Python text: each settings attribute's
+// docstring (help, unit, range, keyword, default) and the keyword lists of register()'s docstring,
+// so that the text has one source.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "bindings.hpp"
+#include "sgdicp/registration/batch_icp.hpp"
+
+namespace sgdicp::python {
+
+// A value as Python writes it, for repr and "Default X." (which the package tests evaluate):
+// enums as Class.member, arrays as tuples.
+std::string python_literal(const py::object& value) {
+  static const py::object enum_type = py::module_::import("enum").attr("Enum");
+  if (py::isinstance(value, enum_type)) {
+    return py::str("{}.{}").format(py::type::handle_of(value).attr("__name__"), value.attr("name"));
+  }
+  if (py::hasattr(value, "tolist")) return py::repr(py::tuple(value.attr("tolist")()));
+  return py::repr(value);
+}
+
+namespace {
+
+// The Python class holding a setting's attribute, by the part of its C++ member before the dot.
+std::string class_of(std::string_view field, std::string_view top) {
+  const auto dot = field.find('.');
+  if (dot == std::string_view::npos) return std::string(top);
+  const std::string_view part = field.substr(0, dot);
+  if (part == "optimizer") return "OptimizerSettings";
+  if (part == "convergence") return "ConvergenceSettings";
+  if (part == "refinement") return "RefinementSettings";
+  if (part == "uncertainty") return "UncertaintySettings";
+  return "NeighborhoodSettings";
+}
+
+// The docstring of a setting's attribute: the table's help, range and unit, and the default read
+// from a default-constructed `defaults`.
+template <typename S>
+std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
+  py::object value = defaults;
+  std::string_view rest = s.field;
+  for (auto dot = rest.find('.'); dot != std::string_view::npos; dot = rest.find('.')) {
+    value = value.attr(std::string(rest.substr(0, dot)).c_str());
+    rest = rest.substr(dot + 1);
+  }
+  value = value.attr(std::string(rest).c_str());
+  std::string doc(s.help);
+  switch (s.kind) {
+    case SettingKind::count:
+    case SettingKind::real:
+      doc += (s.unit.empty() ? ", in " : ", " + std::string(s.unit) + " in ") + s.range.to_string();
+      break;
+    case SettingKind::distance:
+      doc += ", a Distance in " + s.range.to_string() + " scaled units or " +
+             s.metres_range.to_string() + " m";
+      break;
+    case SettingKind::choice:
+      doc += " (" + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
+             " or one of its names)";
+      break;
+    case SettingKind::flag:
+      break;
+  }
+  return doc + ". Keyword " + keyword_of(s.name) + "=. Default " + python_literal(value) + ".";
+}
+
+// Gives every attribute of the settings table its docstring from the table (settings.hpp).
+template <typename S>
+void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, const char* top) {
+  const py::object defaults = m.attr(top)();
+  const py::object property = py::module_::import("builtins").attr("property");
+  for (const auto& s : table) {
+    const std::string cls_name = class_of(s.field, top);
+    if (cls_name != top && std::string_view(top) == "BatchSettings") continue;  // nested: SGD's
+    const py::object cls = m.attr(cls_name.c_str());
+    const std::string field(s.field);
+    const std::string attribute =
+        field.substr(field.find('.') == std::string::npos ? 0 : field.find('.') + 1);
+    const py::object old = cls.attr("__dict__")[attribute.c_str()];
+    std::string doc = attribute_doc(s, defaults);
+    // A part of Settings documents Settings' value; say so where its own default differs.
+    if (cls_name != top) {
+      const std::string own = python_literal(cls().attr(attribute.c_str()));
+      if (doc.substr(doc.rfind("Default ") + 8) != own + ".") {
+        doc += " (That is Settings()'s; a " + cls_name + "() of its own has " + own + ".)";
+      }
+    }
+    py::setattr(cls, attribute.c_str(),
+                property(old.attr("fget"), old.attr("fset"), old.attr("fdel"), doc));
+  }
+}
+
+template <typename S>
+std::string summary_of(const std::vector<Setting<S>>& table, const py::object& defaults,
+                       std::string_view indent) {
+  std::string out;
+  std::string line(indent);
+  for (const auto& s : table) {
+    const std::string doc = attribute_doc(s, defaults);
+    const std::string value = doc.substr(doc.rfind("Default ") + 8, std::string::npos);
+    std::string item = keyword_of(s.name) + " (" + value.substr(0, value.size() - 1);
+    if (s.kind == SettingKind::count || s.kind == SettingKind::real) {
+      item += ", " + s.range.to_string();
+    }
+    item += ")";
+    if (&s != &table.back()) item += ",";
+    if (line.size() + item.size() + 1 > 96 && line.size() > indent.size()) {
+      out += line + "\n";
+      line = std::string(indent);
+    }
+    line += (line.size() > indent.size() ? " " : "") + item;
+  }
+  return out + line;
+}
+
+}  // namespace
+
+std::string keyword_summary(const py::module_& core, Solver solver, std::string_view indent) {
+  if (solver == Solver::sgd) {
+    return summary_of(sgd_settings_table(), core.attr("Settings")(), indent);
+  }
+  return summary_of(batch_settings_table(), core.attr("BatchSettings")(), indent);
+}
+
+void document_settings(py::module_& m) {
+  document_attributes(m, sgd_settings_table(), "Settings");
+  document_attributes(m, batch_settings_table(), "BatchSettings");
+}
+
+}  // namespace sgdicp::python
