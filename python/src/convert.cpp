@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "bindings.hpp"
-#include "sgdicp/error.hpp"
+#include "sgdicp/core/error.hpp"
 
 namespace sgdicp::python {
 namespace {

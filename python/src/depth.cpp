@@ -7,8 +7,8 @@
 #include <pybind11/stl/filesystem.h>
 
 #include "bindings.hpp"
-#include "sgdicp/depth_image.hpp"
-#include "sgdicp/error.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/io/depth_image.hpp"
 
 namespace sgdicp::python {
 namespace {

@@ -5,8 +5,8 @@
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/odometry.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/odometry/odometry.hpp"
 
 namespace sgdicp::python {
 namespace {

@@ -1,12 +1,14 @@
 // Preprocessing of sgd_icp: voxel-grid and random downsampling, normals and covariances from
-// k-nearest neighbourhoods (include/sgdicp/preprocessing.hpp); arrays in, arrays out.
+// k-nearest neighbourhoods (include/sgdicp/surfaces/normals.hpp, points/); arrays in, arrays out.
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "bindings.hpp"
-#include "sgdicp/error.hpp"
-#include "sgdicp/preprocessing.hpp"
+#include "sgdicp/core/error.hpp"
+#include "sgdicp/points/random_downsample.hpp"
+#include "sgdicp/points/voxel_grid.hpp"
+#include "sgdicp/surfaces/normals.hpp"
 
 namespace sgdicp::python {
 namespace {
