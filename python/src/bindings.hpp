@@ -215,7 +215,7 @@ void bind_io(py::module_& m);
 /// Binds translation_error, rotation_error_geodesic and rotation_error_euler_sum.
 void bind_metrics(py::module_& m);
 
-// ---- preprocessing (preprocessing.cpp)
+// ---- normals, covariances and downsampling (preprocessing.cpp)
 
 /// Binds voxel_downsample, random_downsample, estimate_normals and estimate_covariances.
 void bind_preprocessing(py::module_& m);
