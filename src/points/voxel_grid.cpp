@@ -1,4 +1,4 @@
-#include "points/voxel_table.hpp"
+#include "sgdicp/points/voxel_grid.hpp"
 
 #include <chrono>
 #include <type_traits>
@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "core/checks.hpp"
+#include "points/voxel_table.hpp"
 #include "sgdicp/points/scaling.hpp"
-#include "sgdicp/points/voxel_grid.hpp"
 #include "util/parallel_chunks.hpp"
 
 namespace sgdicp {
