@@ -87,7 +87,8 @@ void check_neighborhood(const NeighborhoodSettings& settings) {
 
 PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vector3d& mean,
                                  const Eigen::Matrix3d& covariance, std::size_t count,
-                                 const NeighborhoodSettings& settings, double* variation) {
+                                 const NeighborhoodSettings& settings, double* variation,
+                                 double* linearity) {
   // The closed form costs a fraction of the iterative solver, but its smallest eigenvector
   // loses precision when the two smallest eigenvalues are close (a line, a point, a blob):
   // those neighbourhoods are solved again iteratively.
@@ -109,6 +110,11 @@ PointSurface describe_covariance(const Eigen::Vector3f& point, const Eigen::Vect
   if (variation != nullptr) {
     *variation =
         degenerate ? std::numeric_limits<double>::infinity() : eigenvalues[0] / eigenvalues.sum();
+  }
+  if (linearity != nullptr) {
+    const bool spread = count >= kMinNeighbors && solved && eigenvalues[2] > 0.0;
+    *linearity = spread ? (eigenvalues[2] - std::max(eigenvalues[1], 0.0)) / eigenvalues[2]
+                        : std::numeric_limits<double>::quiet_NaN();
   }
   PointSurface out;
   if (degenerate) {

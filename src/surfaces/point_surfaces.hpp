@@ -43,12 +43,15 @@ void check_neighborhood(const NeighborhoodSettings& settings);
 /// covariance: its normal from the smallest eigenvector, facing the viewpoint, and its raw or
 /// regularized covariance; degenerate neighbourhoods as estimate_covariances describes them.
 /// `variation`, when given, receives the surface variation lambda_0 / (lambda_0 + lambda_1 +
-/// lambda_2), or infinity for a degenerate neighbourhood.
+/// lambda_2), or infinity for a degenerate neighbourhood; `linearity`, when given, the
+/// linearity (lambda_2 - lambda_1) / lambda_2 (1: a line), or NaN for fewer than 3 points or
+/// lambda_2 <= 0.
 [[nodiscard]] PointSurface describe_covariance(const Eigen::Vector3f& point,
                                                const Eigen::Vector3d& mean,
                                                const Eigen::Matrix3d& covariance, std::size_t count,
                                                const NeighborhoodSettings& settings,
-                                               double* variation = nullptr);
+                                               double* variation = nullptr,
+                                               double* linearity = nullptr);
 
 /// Normals and covariances of a cloud, read from it or estimated once per point on first use
 /// over `index`, a KD-tree over exactly that cloud (may be null when the cloud carries what its

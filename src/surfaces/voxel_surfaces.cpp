@@ -22,7 +22,7 @@ namespace {
 // covariance of its k neighbours (half the time: a Kinect frame's thinning with surfaces 22.9
 // against 43.0 ms).
 PointSurface block_surface_of(const Moments& block, const Eigen::Vector3f& centroid,
-                              const NeighborhoodSettings& stored) {
+                              const NeighborhoodSettings& stored, double* linearity) {
   const Eigen::Vector3d mean = block.sum / block.count;
   const auto& outer = block.outer;
   Eigen::Matrix3d covariance;
@@ -30,7 +30,7 @@ PointSurface block_surface_of(const Moments& block, const Eigen::Vector3f& centr
       outer[5];
   covariance = covariance / block.count - mean * mean.transpose();
   return describe_covariance(centroid, mean, covariance, static_cast<std::size_t>(block.count),
-                             stored);
+                             stored, nullptr, linearity);
 }
 
 // A voxel's key and slot, for the blocks' sweep in key order.
@@ -145,17 +145,20 @@ constexpr std::size_t kSweepChunk = 1024;
 }  // namespace
 
 // The block surface of every voxel of an accumulated table into `normals` and `covariances` (by
-// slot); `stored` from in_stored_frame. `side` runs on a second thread while the first sorts the
-// keys, and that thread then joins the sweep: the sweep is claimed in chunks by whichever
-// thread is free. Each voxel's surface is a pure function of its block (sweep_blocks), so the
-// values are the same for any thread count and split.
+// slot), and each block's linearity into `linearities` when given; `stored` from
+// in_stored_frame. `side` runs on a second thread while the first sorts the keys, and that
+// thread then joins the sweep: the sweep is claimed in chunks by whichever thread is free. Each
+// voxel's surface is a pure function of its block (sweep_blocks), so the values are the same for
+// any thread count and split.
 void sweep_surfaces(const VoxelTable<Moments>& table, const NeighborhoodSettings& stored,
                     std::size_t threads, std::vector<Eigen::Vector3f>& normals,
-                    std::vector<Eigen::Matrix3f>& covariances, const std::function<void()>& side) {
+                    std::vector<Eigen::Matrix3f>& covariances, const std::function<void()>& side,
+                    std::vector<double>* linearities) {
   const auto& voxels = table.voxels;
   const std::size_t n = voxels.size();
   normals.resize(n);
   covariances.resize(n);
+  if (linearities != nullptr) linearities->resize(n);
   RecycledVector<KeyedSlot> sorted;
   // The sort's state for the threads that wait for it: pending, done, or failed (its exception
   // reaches the caller through parallel_chunks; nobody sweeps then).
@@ -169,7 +172,9 @@ void sweep_surfaces(const VoxelTable<Moments>& table, const NeighborhoodSettings
       if (begin >= n) return;
       sweep_blocks(sorted, voxels, begin, std::min(n, begin + kSweepChunk),
                    [&](std::uint32_t v, const Moments& block) {
-                     const PointSurface s = block_surface_of(block, voxels[v].centroid(), stored);
+                     double* linearity = linearities != nullptr ? &(*linearities)[v] : nullptr;
+                     const PointSurface s =
+                         block_surface_of(block, voxels[v].centroid(), stored, linearity);
                      normals[v] = s.normal;
                      covariances[v] = s.covariance;
                    });
