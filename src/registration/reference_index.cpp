@@ -16,10 +16,10 @@ namespace {
 
 // Where a grid chosen from the data leaves single scan lines in its 3x3x3 blocks, the block
 // normal is perpendicular to the beam, not to the surface: on the hand-held spinning LiDAR
-// (BALM) the median block linearity is 0.93-0.98 and point-to-plane ends 2.5 cm / 0.19° off
+// (BALM) the median block linearity is 0.93-0.98 and point-to-plane ends 2.6 cm / 0.183° off
 // (79 % within 5 cm and 1°). Above kLinearBlocks each centroid takes the block surface of its
-// voxel in a grid kCoarseFactor times coarser, whose blocks span several rings: BALM 0.61 cm /
-// 0.051° / 100 %, 2 ms more (23.3 -> 25.3 ms); a factor of 2 left 0.081°. The threshold sits
+// voxel in a grid kCoarseFactor times coarser, whose blocks span several rings: BALM 0.58 cm /
+// 0.053° / 100 %, 2 ms more (23.3 -> 25.3 ms); a factor of 2 left 0.081°. The threshold sits
 // between dense LiDAR (KITTI 0.54-0.58, the car 0.54) and sparse rings (KITTI of 32 or 16 beams
 // 0.74-0.99); RGB-D and maps are at 0.31-0.33.
 constexpr double kLinearBlocks = 0.65;
