@@ -165,21 +165,6 @@ TEST(LidarRings, ScanLinesTakeTheNormalsOfAGridThreeTimesCoarser) {
   EXPECT_EQ(reference_index_for(rings, settings).cloud().normals, blocks.normals);
 }
 
-// A dense surface (a floor, walls, a box and a ball) keeps its own blocks' normals, bit for bit.
-TEST(LidarRings, DenseSurfacesKeepTheirOwnBlocks) {
-  const PointCloud scene = test::synthetic_scene(8);  // 60k points
-  SgdSettings settings;
-  settings.downsample_to = 8000;
-  const ReferenceIndex index = reference_index_for(scene, settings);
-  NeighborhoodSettings neighborhood = settings.neighborhood;
-  neighborhood.num_threads = 1;
-  const PointCloud blocks =
-      voxel_downsample_with_surfaces(scene, index.voxel_size_m(), neighborhood);
-  EXPECT_EQ(index.cloud().points, blocks.points);
-  EXPECT_EQ(index.cloud().normals, blocks.normals);
-  EXPECT_EQ(index.cloud().covariances, blocks.covariances);
-}
-
 // A 16-beam scan of the street from two poses 0.6 m and 1.5 deg apart, registered by default
 // (the grid chosen from the data) and on the same grid given explicitly (its own blocks'
 // normals). There the blocks hold single rings, whose normals lie across the beam: point-to-plane

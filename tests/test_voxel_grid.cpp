@@ -311,8 +311,11 @@ TEST(RegistrationVoxelGrid, DenseGridsCarryTheirBlocksSurfaces) {
   neighborhood.num_threads = 1;
   const PointCloud blocks =
       voxel_downsample_with_surfaces(scene, index.voxel_size_m(), neighborhood);
+  // Bit for bit: a dense surface's blocks are not scan lines, so they keep their own surfaces
+  // (the coarse normals of test_lidar_rings.cpp do not apply).
   EXPECT_EQ(index.cloud().points, blocks.points);
   EXPECT_EQ(index.cloud().normals, blocks.normals);
+  EXPECT_EQ(index.cloud().covariances, blocks.covariances);
   SgdSettings sparse = dense;
   sparse.downsample_to = 40000;  // ~1.5 points per voxel
   EXPECT_FALSE(reference_index_for(scene, sparse).cloud().has_normals());
