@@ -6,14 +6,16 @@
 # two threads, and the batch and GICP methods on the smaller files, then compares the CSV rows
 # without their three timing columns. Prints one line per run; exits 1 if any differs.
 set -uo pipefail
-cd "$(dirname "$0")/.."
 if [ $# -lt 2 ]; then
   echo "usage: bench/same_results.sh OLD_SGDICP NEW_SGDICP [PAIRS_FILE...]" >&2
   exit 2
 fi
-old=$1 new=$2
+# Paths as given from the caller's folder, before moving to the repository's.
+old=$(realpath "$1") new=$(realpath "$2")
 shift 2
-pairs=("$@")
+pairs=()
+for p in "$@"; do pairs+=("$(realpath "$p")"); done
+cd "$(dirname "$0")/.." || exit 2
 if [ ${#pairs[@]} -eq 0 ]; then
   pairs=(../shared/data/pairs/*.txt)
   sevenscenes=../generated/sevenscenes_redkitchen/sevenscenes_redkitchen.txt
