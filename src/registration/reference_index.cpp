@@ -1,6 +1,5 @@
 #include "registration/reference_index.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -25,15 +24,18 @@ namespace {
 constexpr double kLinearBlocks = 0.65;
 constexpr std::int64_t kCoarseFactor = 3;  // integer: fine voxels nest in coarse ones
 
-// The median of the blocks' linearities (NaN, blocks of fewer than 3 points, left out), 0 when
-// none has one. Reorders `linearities`.
-double median_linearity(std::vector<double>& linearities) {
-  const auto end = std::remove_if(linearities.begin(), linearities.end(),
-                                  [](double l) { return std::isnan(l); });
-  if (end == linearities.begin()) return 0.0;
-  const auto middle = linearities.begin() + (end - linearities.begin()) / 2;
-  std::nth_element(linearities.begin(), middle, end);
-  return *middle;
+// Whether the median of the blocks' linearities (NaN, blocks of fewer than 3 points, left out) is
+// above `threshold`: the middle of the n sorted values, the (n/2)-th from 0, lies above it
+// exactly when at most n/2 lie at or below it. A count, not a sort; false when no block has one.
+bool median_above(const std::vector<double>& linearities, double threshold) {
+  std::size_t valid = 0;
+  std::size_t at_or_below = 0;
+  for (const double l : linearities) {
+    if (std::isnan(l)) continue;
+    ++valid;
+    if (l <= threshold) ++at_or_below;
+  }
+  return valid > 0 && at_or_below <= valid / 2;
 }
 
 // The index of the coarse voxel holding fine voxel index i: floor(i / kCoarseFactor).
@@ -99,7 +101,7 @@ ReferenceIndex with_block_surfaces(const VoxelTable<Moments>& table, PointCloud 
   };
   sweep_surfaces(table, stored, stored.num_threads, normals, covariances, build_tree,
                  grid_from_data ? &linearities : nullptr);
-  if (grid_from_data && median_linearity(linearities) > kLinearBlocks) {
+  if (grid_from_data && median_above(linearities, kLinearBlocks)) {
     take_coarse_surfaces(table, stored, stored.num_threads, normals, covariances);
   }
   index->set_normals_and_covariances(std::move(normals), std::move(covariances));
