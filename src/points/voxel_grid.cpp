@@ -1,6 +1,5 @@
 #include "sgdicp/points/voxel_grid.hpp"
 
-#include <chrono>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -9,6 +8,7 @@
 #include "points/voxel_table.hpp"
 #include "sgdicp/points/scaling.hpp"
 #include "util/parallel_chunks.hpp"
+#include "util/stopwatch.hpp"
 
 namespace sgdicp {
 namespace detail {
@@ -152,10 +152,9 @@ VoxelTable<Voxel> voxel_table(const PointCloud& cloud, const VoxelGrid& grid, st
   std::vector<std::optional<VoxelTable<Voxel>>> tables(parts.size());
   std::vector<double> ms(parts.size());
   for_parts(parts.size(), threads, [&](std::size_t part) {
-    const auto start = std::chrono::steady_clock::now();
+    const Stopwatch clock;
     tables[part] = table_of<Voxel>(cloud, grid, parts[part], expected, limit, record);
-    ms[part] =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    ms[part] = clock.elapsed_ms();
   });
   if (counting) rebalance(parts, ms, cloud.size());
   VoxelTable<Voxel> table = std::move(*tables.front());
