@@ -87,15 +87,16 @@ void write_report_csv(const std::string& path, const FrameSource& source,
                       const std::vector<FrameReport>& reports) {
   std::ofstream out(path);
   if (!out) throw IoError(path + ": cannot open for writing");
-  out << "frame,file,failed,converged,iterations,source_points,map_points,inlier_ratio,"
-         "inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n"
+  out << "frame,file,failed,recovered,start,converged,iterations,source_points,map_points,"
+         "overlap,inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n"
       << std::setprecision(6);
   for (const auto& r : reports) {
     std::string message = r.message;
     std::replace(message.begin(), message.end(), '"', '\'');
     out << r.index << ',' << source.frames[r.index].filename().string() << ',' << r.failed << ','
-        << r.converged << ',' << r.iterations << ',' << r.source_points << ',' << r.map_points
-        << ',' << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ','
+        << r.recovered << ',' << to_string(r.start) << ',' << r.converged << ',' << r.iterations
+        << ',' << r.source_points << ',' << r.map_points << ',' << r.overlap << ','
+        << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ','
         << r.index_build_ms << ',' << r.time_ms << ",\"" << message << "\"\n";
   }
   if (!out) throw IoError(path + ": write error");

@@ -46,17 +46,15 @@ inline Eigen::Vector3d synthetic_world_point(std::mt19937_64& rng) {
   }
 }
 
-/// `frames` frames moving `step_m` forward and turning `yaw_deg` per frame (a gentle bend), each
-/// with about `points` points within `range_m`, noise sigma `noise_m`.
-inline SyntheticSequence synthetic_sequence(std::size_t frames, double step_m, double yaw_deg,
-                                            std::uint64_t seed, std::size_t points = 15000,
-                                            double range_m = 15.0, double noise_m = 0.005) {
-  SyntheticSequence out;
+/// One frame per pose T_world_frame: about `points` world points within `range_m` of the sensor,
+/// in its frame, noise sigma `noise_m`, sampled anew per frame.
+inline std::vector<PointCloud> synthetic_frames(const std::vector<Eigen::Matrix4d>& T_world_frame,
+                                                std::uint64_t seed, std::size_t points = 15000,
+                                                double range_m = 15.0, double noise_m = 0.005) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, noise_m);
-  Eigen::Matrix4d T = make_transform(0, 0, 0, Eigen::Vector3d(0, 0, 1.5));
-  const Eigen::Matrix4d T0_inv = T.inverse();
-  for (std::size_t f = 0; f < frames; ++f) {
+  std::vector<PointCloud> frames;
+  for (const Eigen::Matrix4d& T : T_world_frame) {
     const Eigen::Matrix4d T_frame_world = T.inverse();
     PointCloud frame;
     while (frame.size() < points) {
@@ -66,12 +64,32 @@ inline SyntheticSequence synthetic_sequence(std::size_t frames, double step_m, d
       frame.points.push_back(
           (p + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))).cast<float>());
     }
-    out.frames.push_back(std::move(frame));
-    out.T_world_frame.push_back(T0_inv * T);
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
+/// The sensor's start: 1.5 m above the floor of the synthetic world.
+inline Eigen::Matrix4d synthetic_start() {
+  return make_transform(0, 0, 0, Eigen::Vector3d(0, 0, 1.5));
+}
+
+/// `frames` frames moving `step_m` forward and turning `yaw_deg` per frame (a gentle bend), each
+/// with about `points` points within `range_m`, noise sigma `noise_m`.
+inline SyntheticSequence synthetic_sequence(std::size_t frames, double step_m, double yaw_deg,
+                                            std::uint64_t seed, std::size_t points = 15000,
+                                            double range_m = 15.0, double noise_m = 0.005) {
+  SyntheticSequence out;
+  Eigen::Matrix4d T = synthetic_start();
+  std::vector<Eigen::Matrix4d> T_world;
+  for (std::size_t f = 0; f < frames; ++f) {
+    T_world.push_back(T);
+    out.T_world_frame.push_back(synthetic_start().inverse() * T);
     // Speed varies a little (accelerating), so the constant-velocity prediction is not exact.
     const double step = step_m * (1.0 + 0.2 * std::sin(0.3 * static_cast<double>(f)));
     T = T * make_transform(0, 0, yaw_deg * kDeg, Eigen::Vector3d(step, 0, 0));
   }
+  out.frames = synthetic_frames(T_world, seed, points, range_m, noise_m);
   return out;
 }
 

@@ -63,116 +63,18 @@ void cap_step(SgdSettings& s, const ReferenceIndex& map) {
 
 }  // namespace
 
-// ---- settings
-
-const std::vector<OdometrySetting>& odometry_settings_table() {
-  using S = OdometrySettings;
-  static const std::vector<OdometrySetting> table{
-      {"max-range",
-       false,
-       {0.0, 1e6, true},
-       "m",
-       "Points farther from the sensor are dropped; the map keeps voxels within this radius",
-       [](const S& s) { return s.max_range_m; },
-       [](S& s, double v) { s.max_range_m = v; }},
-      {"min-range",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Points closer to the sensor are dropped",
-       [](const S& s) { return s.min_range_m; },
-       [](S& s, double v) { s.min_range_m = v; }},
-      {"voxel-size",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Map voxel side (frames thinned to half of it for the map, 1.5 times it for the "
-       "registration); 0 = 1 % of the first frame's 99th-percentile range",
-       [](const S& s) { return s.voxel_size_m; },
-       [](S& s, double v) { s.voxel_size_m = v; }},
-      {"max-points-per-voxel",
-       true,
-       {1.0, 10000.0},
-       "",
-       "Points kept per map voxel",
-       [](const S& s) { return static_cast<double>(s.max_points_per_voxel); },
-       [](S& s, double v) { s.max_points_per_voxel = static_cast<std::size_t>(v); }},
-      {"initial-threshold",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Correspondence threshold sigma before any motion is observed (d_max = 3 sigma); 0 = 2 "
-       "voxels",
-       [](const S& s) { return s.initial_threshold_m; },
-       [](S& s, double v) { s.initial_threshold_m = v; }},
-      {"min-motion",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Deviations from the prediction below this do not adapt the threshold; 0 = voxel / 10",
-       [](const S& s) { return s.min_motion_m; },
-       [](S& s, double v) { s.min_motion_m = v; }},
-      {"max-translation-per-frame",
-       false,
-       {0.0, 1e6, true},
-       "m",
-       "A registered motion between consecutive frames beyond this is a failed frame",
-       [](const S& s) { return s.max_translation_per_frame_m; },
-       [](S& s, double v) { s.max_translation_per_frame_m = v; }},
-      {"max-rotation-per-frame",
-       false,
-       {0.0, 180.0, true},
-       "deg",
-       "A registered rotation between consecutive frames beyond this is a failed frame",
-       [](const S& s) { return s.max_rotation_per_frame_deg; },
-       [](S& s, double v) { s.max_rotation_per_frame_deg = v; }},
-  };
-  return table;
-}
-
-std::string OdometrySetting::spelled(SettingNames names) const {
-  std::string out(name);
-  if (names == SettingNames::cli) return "--" + out;
-  std::replace(out.begin(), out.end(), '-', '_');
-  return names == SettingNames::python ? out + "=" : out;
-}
-
-const OdometrySetting* find_odometry_setting(std::string_view name) {
-  for (const auto& s : odometry_settings_table()) {
-    if (detail::same_name(s.name, name)) return &s;
-  }
-  return nullptr;
-}
-
-void OdometrySettings::validate(SettingNames names) const {
-  for (const auto& s : odometry_settings_table()) {
-    const double v = s.get(*this);
-    if (!std::isfinite(v) || !s.range.contains(v) || (s.integer && v != std::floor(v))) {
-      throw InvalidSettingsError(s.spelled(names) + " " + format_number(v) + ": must be in " +
-                                 s.range.to_string() + (s.unit.empty() ? "" : " ") +
-                                 std::string(s.unit));
-    }
-  }
-  if (min_range_m >= max_range_m) {
-    throw InvalidSettingsError(find_odometry_setting("min-range")->spelled(names) + " " +
-                               format_number(min_range_m) + ": must be below " +
-                               find_odometry_setting("max-range")->spelled(names) + " " +
-                               format_number(max_range_m));
-  }
-}
-
 // ---- adaptive threshold
 
-AdaptiveThreshold::AdaptiveThreshold(double initial_m, double min_motion_m, double max_range_m)
-    : initial_m_(initial_m), min_motion_m_(min_motion_m), max_range_m_(max_range_m) {}
+AdaptiveThreshold::AdaptiveThreshold(double initial_m, double min_motion_m)
+    : initial_m_(initial_m), min_motion_m_(min_motion_m) {}
 
-double AdaptiveThreshold::displacement_m(const Eigen::Matrix4d& T, double max_range_m) {
+double AdaptiveThreshold::displacement_m(const Eigen::Matrix4d& T, double range_m) {
   const double theta = rotation_angle_rad(T);
-  return T.topRightCorner<3, 1>().norm() + 2.0 * max_range_m * std::sin(theta / 2.0);
+  return T.topRightCorner<3, 1>().norm() + 2.0 * range_m * std::sin(theta / 2.0);
 }
 
-void AdaptiveThreshold::update(const Eigen::Matrix4d& deviation) {
-  const double d = displacement_m(deviation, max_range_m_);
+void AdaptiveThreshold::update(const Eigen::Matrix4d& deviation, double range_m) {
+  const double d = displacement_m(deviation, range_m);
   if (!std::isfinite(d) || d <= min_motion_m_) return;
   sum_squares_ += d * d;
   ++samples_;
@@ -240,12 +142,24 @@ void Odometry::start(const PointCloud& cropped) {
   const double min_motion =
       settings_.min_motion_m > 0.0 ? settings_.min_motion_m : 0.1 * voxel_size_m_;
   map_.emplace(voxel_size_m_, settings_.max_points_per_voxel);
-  threshold_.emplace(initial, min_motion, settings_.max_range_m);
+  threshold_.emplace(initial, min_motion);
 }
 
 Eigen::Matrix4d Odometry::predicted() const {
   return poses_.empty() ? Eigen::Matrix4d::Identity()
                         : Eigen::Matrix4d(poses_.back() * last_motion_);
+}
+
+std::string_view to_string(FrameStart start) noexcept {
+  switch (start) {
+    case FrameStart::prediction:
+      return "prediction";
+    case FrameStart::last_pose:
+      return "last pose";
+    case FrameStart::wide_basin:
+      return "wide basin";
+  }
+  return "?";
 }
 
 Eigen::Matrix4d Odometry::skip_frame(const std::string& message) {
@@ -290,8 +204,6 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   }
   const PointCloud source = voxel_downsample(map_frame, 1.5 * voxel_size_m_);
   report.source_points = source.size();
-  const double sigma = threshold_->sigma_m();
-  if (settings_.adaptive_threshold) report.threshold_m = 3.0 * sigma;
 
   const double build_start = now_ms();
   ReferenceIndex index(map_->points());
@@ -299,16 +211,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   report.index_build_ms = now_ms() - build_start;
   report.map_points = index.size();
 
-  const Eigen::Matrix4d T_guess = report.T_first_frame;
-  RegistrationResult r;
-  try {
-    r = align_to_map(source, index, sigma, T_guess);
-  } catch (const InvalidInputError& e) {
-    report.failed = true;
-    report.message = std::string("registration refused the frame: ") + e.what();
-    return finish(report, map_frame, started);
-  }
-  judge_registration(r, T_guess, report);
+  register_to_map(source, index, range_percentile_m(map_frame), report);
   return finish(report, map_frame, started);
 }
 
@@ -324,7 +227,19 @@ Eigen::Matrix4d Odometry::repeat_previous_pose(double started_ms) {
 }
 
 RegistrationResult Odometry::align_to_map(const PointCloud& source, const ReferenceIndex& index,
-                                          double sigma_m, const Eigen::Matrix4d& T_guess) const {
+                                          double sigma_m, const Eigen::Matrix4d& T_guess,
+                                          FrameStart start) const {
+  if (start == FrameStart::wide_basin) {
+    // SGD-ICP as `sgdicp register` runs it: d_max 0.5 scaled and the point-to-point coarse
+    // stage, the basin that registers scans moved 30 m / 30 deg (docs/design.md), whatever the
+    // method; the map's surfaces serve the plane costs.
+    SgdSettings s = method_->solver == Solver::sgd ? sgd_ : SgdSettings{};
+    if (method_->solver != Solver::sgd) s.cost = batch_.cost;
+    s.max_correspondence_distance = SgdSettings{}.max_correspondence_distance;
+    s.voxel_size_m = 0.0;
+    s.downsample_to = 0;
+    return align(source, index, s, T_guess);
+  }
   if (method_->solver == Solver::sgd) {
     SgdSettings s = sgd_;
     if (settings_.adaptive_threshold) s.max_correspondence_distance = Distance::metres(3 * sigma_m);
@@ -336,38 +251,123 @@ RegistrationResult Odometry::align_to_map(const PointCloud& source, const Refere
   return align_batch(source, index, b, T_guess);
 }
 
-void Odometry::judge_registration(const RegistrationResult& r, const Eigen::Matrix4d& T_guess,
-                                  FrameReport& report) {
-  report.converged = r.converged;
-  report.iterations = r.iterations;
-  report.inlier_ratio = r.inlier_ratio;
-  report.inlier_rmse_m = r.inlier_rmse_m;
-  report.message = r.message;
+namespace {
 
-  const Eigen::Matrix4d motion = rigid_inverse(poses_.back()) * r.T_reference_source;
+constexpr std::size_t kOverlapFrames = 10;  // recent registered frames whose overlap is the norm
+constexpr double kOverlapDrop = 0.5;        // a frame below this fraction of their median is off
+constexpr std::size_t kOverlapPoints = 1000;
+
+// The fraction of (at most kOverlapPoints evenly spread) source points that T puts within
+// radius_m of a map point.
+double overlap_fraction(const PointCloud& source, const ReferenceIndex& map,
+                        const Eigen::Matrix4d& T, double radius_m) {
+  if (source.empty() || !T.allFinite()) return 0.0;
+  const std::size_t stride = std::max<std::size_t>(1, source.size() / kOverlapPoints);
+  const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
+  const Eigen::Vector3d t = T.topRightCorner<3, 1>();
+  const auto radius2 = static_cast<float>(radius_m * radius_m);
+  std::size_t near = 0;
+  std::size_t looked = 0;
+  for (std::size_t i = 0; i < source.size(); i += stride, ++looked) {
+    const Eigen::Vector3f p = (R * source.points[i].cast<double>() + t).cast<float>();
+    near += map.nearest(p, radius2) ? 1 : 0;
+  }
+  return static_cast<double>(near) / static_cast<double>(looked);
+}
+
+double median_of(std::vector<double> v) {
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+std::string Odometry::judge(const RegistrationResult& r, double overlap) const {
+  if (!r.converged) return "not converged: " + r.message;
+  // The bounds hold per frame since the last registered one (lost frames in between).
+  const auto frames = static_cast<double>(lost_since_good_ + 1);
+  const Eigen::Matrix4d motion = rigid_inverse(T_last_good_) * r.T_reference_source;
   const double step_m = motion.topRightCorner<3, 1>().norm();
   const double turn_deg = rotation_angle_rad(motion) * 180.0 / std::numbers::pi;
-  if (!r.converged) {
-    report.failed = true;
-    report.message = "not converged: " + r.message;
-  } else if (!r.T_reference_source.allFinite() || step_m > settings_.max_translation_per_frame_m ||
-             turn_deg > settings_.max_rotation_per_frame_deg) {
-    report.failed = true;
-    report.message = "motion beyond the bounds per frame: " + format_number(step_m) + " m, " +
-                     format_number(turn_deg) + " deg";
-  } else {
-    report.T_first_frame = r.T_reference_source;
-    threshold_->update(rigid_inverse(T_guess) * r.T_reference_source);
+  if (!r.T_reference_source.allFinite() ||
+      step_m > frames * settings_.max_translation_per_frame_m ||
+      turn_deg > std::min(180.0, frames * settings_.max_rotation_per_frame_deg)) {
+    return "motion beyond the bounds per frame: " + format_number(step_m) + " m, " +
+           format_number(turn_deg) + " deg";
   }
+  if (!overlaps_.empty() && overlap < kOverlapDrop * median_of(overlaps_)) {
+    return "overlap with the map " + format_number(overlap) + ", below half the last frames' " +
+           format_number(median_of(overlaps_));
+  }
+  return "";
+}
+
+void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& index,
+                               double range_m, FrameReport& report) {
+  const Eigen::Matrix4d T_prediction = report.T_first_frame;
+  const double sigma = threshold_->sigma_m();
+  if (settings_.adaptive_threshold) report.threshold_m = 3.0 * sigma;
+  std::string rejected;
+  for (const FrameStart start :
+       {FrameStart::prediction, FrameStart::last_pose, FrameStart::wide_basin}) {
+    const Eigen::Matrix4d T_guess = start == FrameStart::prediction ? T_prediction : T_last_good_;
+    if (start == FrameStart::last_pose && T_guess.isApprox(T_prediction)) continue;
+    RegistrationResult r;
+    std::string why;
+    try {
+      r = align_to_map(source, index, sigma, T_guess, start);
+    } catch (const InvalidInputError& e) {
+      why = std::string("registration refused the frame: ") + e.what();
+    }
+    const double overlap =
+        why.empty() ? overlap_fraction(source, index, r.T_reference_source, voxel_size_m_) : 0.0;
+    if (why.empty()) why = judge(r, overlap);
+    report.iterations += r.iterations;
+    if (why.empty()) {
+      report.converged = true;
+      report.start = start;
+      report.recovered = start != FrameStart::prediction;
+      report.overlap = overlap;
+      report.inlier_ratio = r.inlier_ratio;
+      report.inlier_rmse_m = r.inlier_rmse_m;
+      report.message = report.recovered ? "recovered from the " + std::string(to_string(start)) +
+                                              " (" + rejected + ")"
+                                        : r.message;
+      report.T_first_frame = r.T_reference_source;
+      // Only registrations from the prediction sample how far it is off: a retry's start was
+      // not the prediction.
+      if (!report.recovered)
+        threshold_->update(rigid_inverse(T_prediction) * r.T_reference_source, range_m);
+      return;
+    }
+    rejected += (rejected.empty() ? "" : "; ") + std::string(to_string(start)) + ": " + why;
+  }
+  report.failed = true;
+  report.message = "lost (" + rejected + ")";
 }
 
 Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame,
                                  double started_ms) {
   report.index = poses_.size();
   const Eigen::Matrix4d T = report.T_first_frame;
-  if (!poses_.empty()) last_motion_ = rigid_inverse(poses_.back()) * T;
+  if (!report.failed) {
+    // The motion model learns only from two registered frames in a row: across lost frames the
+    // motion per frame is unknown, so the next prediction is the pose itself.
+    last_motion_ = lost_since_good_ == 0 && !poses_.empty()
+                       ? Eigen::Matrix4d(rigid_inverse(T_last_good_) * T)
+                       : Eigen::Matrix4d::Identity();
+    T_last_good_ = T;
+    lost_since_good_ = 0;
+    if (report.overlap > 0.0) {
+      overlaps_.push_back(report.overlap);
+      if (overlaps_.size() > kOverlapFrames) overlaps_.erase(overlaps_.begin());
+    }
+  } else if (!poses_.empty()) {
+    ++lost_since_good_;
+  }
   if (map_ && !map_frame.empty()) {
-    // A failed frame is not added: its pose is a guess, and the map must stay consistent.
+    // A lost frame is not added: its pose is a guess, and the map must stay consistent.
     if (!report.failed || map_->empty()) map_->add(transformed(map_frame, T));
     map_->remove_far_from(T.topRightCorner<3, 1>(), settings_.max_range_m);
   }

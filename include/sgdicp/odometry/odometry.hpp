@@ -6,10 +6,12 @@
 //     sensor, updated incrementally;
 //   - a constant-velocity prediction (the last frame-to-frame motion repeated) as initial guess;
 //   - a correspondence threshold adapted to the observed deviation of the registrations from
-//     the prediction (AdaptiveThreshold);
+//     the prediction (AdaptiveThreshold), measured at the frame's own range;
 //   - any method of methods.hpp (SGD-ICP by default) as the registration step.
-// A frame whose registration fails (not converged, too few points, or a motion beyond the
-// physical bounds per frame) is reported as failed and gets the predicted pose. docs/odometry.md.
+// A registration is judged before its pose is taken (converged, within the bounds per frame,
+// an overlap with the map like the frames before); one that fails is retried from the last
+// good pose and then with SGD-ICP's wide basin. A frame no start registers is lost: it gets the
+// predicted pose and touches neither the map nor the motion model. docs/odometry.md.
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -50,9 +52,12 @@ struct OdometrySettings {
   /// standing sensor would shrink it to nothing); 0 = voxel / 10.
   double min_motion_m = 0.0;
   /// Physical bounds of the motion between consecutive frames: a registration beyond either is
-  /// a failed frame.
+  /// rejected (and retried). 5 m per frame is 180 km/h at 10 Hz. No bound on rotation by
+  /// default: a hand-held sensor turns 54 deg between scans at 1 Hz and 62 deg at 0.67 Hz
+  /// (../shared/data/balm_handheld_lidar), and a 45 deg bound rejected those correct
+  /// registrations and lost the track; a wrong one is caught by its overlap with the map.
   double max_translation_per_frame_m = 5.0;
-  double max_rotation_per_frame_deg = 45.0;
+  double max_rotation_per_frame_deg = 180.0;
   /// Derive d_max from the observed deviations (true), or keep the registration settings' own
   /// max_correspondence_distance (false; the CLI and Python set it when --max-distance is given).
   bool adaptive_threshold = true;
@@ -86,29 +91,51 @@ struct OdometrySetting {
 
 /// The correspondence threshold sigma of KISS-ICP's eq. (4)-(5): the RMS, over the frames so far,
 /// of the deviation of each registration from its prediction, measured as the largest
-/// displacement it causes to a point within max_range: |dt| + 2 max_range sin(|dtheta| / 2).
+/// displacement it causes to a point of the frame: |dt| + 2 r sin(|dtheta| / 2), r the range
+/// within which the frame's points lie (KISS-ICP takes its max_range setting, 100 m: on a 20 m
+/// scene a 2 deg deviation then counts 3.5 m and d_max reached 70-120 m, docs/odometry.md).
 /// Deviations below min_motion are not counted; before the first counted one sigma is initial.
 class AdaptiveThreshold {
  public:
-  AdaptiveThreshold(double initial_m, double min_motion_m, double max_range_m);
-  /// Adds the deviation T_prediction^-1 T_estimate of one registered frame.
-  void update(const Eigen::Matrix4d& deviation);
+  AdaptiveThreshold(double initial_m, double min_motion_m);
+  /// Adds the deviation T_prediction^-1 T_estimate of one registered frame whose points lie
+  /// within range_m of the sensor.
+  void update(const Eigen::Matrix4d& deviation, double range_m);
   [[nodiscard]] double sigma_m() const;
   [[nodiscard]] std::size_t samples() const noexcept { return samples_; }
-  /// The point displacement bound of a transform (metres), as used by update().
-  [[nodiscard]] static double displacement_m(const Eigen::Matrix4d& T, double max_range_m);
+  /// The point displacement bound of a transform on points within range_m (metres), as used by
+  /// update().
+  [[nodiscard]] static double displacement_m(const Eigen::Matrix4d& T, double range_m);
 
  private:
-  double initial_m_, min_motion_m_, max_range_m_;
+  double initial_m_, min_motion_m_;
   double sum_squares_ = 0.0;
   std::size_t samples_ = 0;
 };
 
 /// What happened to one frame.
+/// Where a frame's registration started.
+enum class FrameStart {
+  prediction,  ///< the constant-velocity prediction
+  last_pose,   ///< the last registered pose, without the velocity (a retry)
+  wide_basin,  ///< the last registered pose, with SGD-ICP's own wide basin (a retry)
+};
+[[nodiscard]] std::string_view to_string(FrameStart start) noexcept;
+
 struct FrameReport {
   std::size_t index = 0;
   Eigen::Matrix4d T_first_frame = Eigen::Matrix4d::Identity();
-  bool failed = false;     ///< the pose is the prediction, not a registration (see message)
+  /// Lost: no start registered the frame; the pose is the prediction (see message) and neither
+  /// the map nor the motion model took the frame in.
+  bool failed = false;
+  /// Registered by a retry, after the registration from the prediction was rejected (message
+  /// says why); start says which.
+  bool recovered = false;
+  FrameStart start = FrameStart::prediction;
+  /// Of the registered frame: the fraction of its registered points with a map point within one
+  /// map voxel. A frame is rejected below half the median of the last frames' (the frame has
+  /// slid off the map), 0 when not registered.
+  double overlap = 0.0;
   bool converged = false;  ///< the registration's convergence test passed
   /// The frame is identical to the previous one (a sensor delivering a frame twice, as 59 of the
   /// 600 7-Scenes frames): it gets the previous pose and the motion model is kept, since the
@@ -164,11 +191,16 @@ class Odometry {
   /// The registration step of a frame to the map (d_max 3 sigma when adaptive).
   [[nodiscard]] RegistrationResult align_to_map(const PointCloud& source,
                                                 const ReferenceIndex& index, double sigma_m,
-                                                const Eigen::Matrix4d& T_guess) const;
-  /// Takes the registration's pose into the report, or marks the frame failed when it did not
-  /// converge or moved beyond the bounds per frame.
-  void judge_registration(const RegistrationResult& r, const Eigen::Matrix4d& T_guess,
-                          FrameReport& report);
+                                                const Eigen::Matrix4d& T_guess,
+                                                FrameStart start) const;
+  /// Registers the frame from each start in turn until one is accepted (judge), filling the
+  /// report; lost when none is.
+  void register_to_map(const PointCloud& source, const ReferenceIndex& index, double range_m,
+                       FrameReport& report);
+  /// Why a registration cannot be the frame's pose ("" = accepted): not converged, a motion
+  /// beyond the bounds per frame since the last registered frame, or an overlap below half the
+  /// recent frames'.
+  [[nodiscard]] std::string judge(const RegistrationResult& r, double overlap) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
 
   OdometrySettings settings_;
@@ -179,6 +211,9 @@ class Odometry {
   std::optional<VoxelMap> map_;
   std::optional<AdaptiveThreshold> threshold_;
   Eigen::Matrix4d last_motion_ = Eigen::Matrix4d::Identity();  ///< T_{k-2}^-1 T_{k-1}
+  Eigen::Matrix4d T_last_good_ = Eigen::Matrix4d::Identity();  ///< last registered frame's pose
+  std::size_t lost_since_good_ = 0;  ///< frames lost since the last registered one
+  std::vector<double> overlaps_;     ///< of the registered frames, the last kOverlapFrames
   std::vector<Eigen::Vector3f> previous_points_;  ///< of the last frame, to spot a repeat
   std::vector<Eigen::Matrix4d> poses_;
   std::vector<FrameReport> reports_;
