@@ -15,6 +15,7 @@
 #include "cli_settings.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/frame_source.hpp"
+#include "sgdicp/io/io.hpp"
 #include "sgdicp/io/trajectory_io.hpp"
 #include "sgdicp/metrics/trajectory_metrics.hpp"
 #include "sgdicp/odometry/odometry.hpp"
@@ -31,6 +32,8 @@ struct OdometryOptions {
   std::string ground_truth_calib;
   std::string picture;
   std::string report;
+  std::string map_out;
+  double map_voxel_m = 0.0;
   bool ground_truth_prefix = false;
   double rate_hz = 0.0;
   std::size_t max_frames = 0;
@@ -215,7 +218,7 @@ bool register_or_skip(Odometry& odometry, const FrameSource& source, std::size_t
   return false;
 }
 
-// Runs the odometry over the first `frames` frames, with a failure line per failed frame and
+// Runs the odometry over the first `frames` frames, with a line per lost frame and
 // the progress on stderr (unless --quiet); returns the number of unreadable frames.
 std::size_t register_frames(const OdometryOptions& o, const FrameSource& source, std::size_t frames,
                             Odometry& odometry, std::chrono::steady_clock::time_point start) {
@@ -228,7 +231,7 @@ std::size_t register_frames(const OdometryOptions& o, const FrameSource& source,
     if (r.failed && !o.quiet) {
       std::cerr << (progress_open ? "\n" : "") << "frame " << i << " ("
                 << source.frames[i].filename().string()
-                << "): FAILED, predicted pose used: " << r.message << '\n';
+                << "): LOST, predicted pose used: " << r.message << '\n';
       progress_open = false;
     }
     const auto now = std::chrono::steady_clock::now();
@@ -256,6 +259,22 @@ void write_outputs(const OdometryOptions& o, const FrameSource& source, std::siz
     write_tum_trajectory(o.tum, odometry.poses(), times);
   }
   if (!o.report.empty()) write_report_csv(o.report, source, odometry.reports());
+  if (!o.map_out.empty()) write_point_cloud(o.map_out, odometry.map_cloud(o.map_voxel_m));
+}
+
+// --map-out is checked before the run, so that a long run does not end in an unwritable name.
+void check_map_options(const OdometryOptions& o) {
+  if (!(o.map_voxel_m >= 0.0 && o.map_voxel_m <= 1e6)) {
+    throw InvalidSettingsError("--map-voxel " + format_number(o.map_voxel_m) +
+                               ": must be in [0, 1000000] m");
+  }
+  if (o.map_out.empty()) return;
+  const FileFormat format = format_from_extension(o.map_out);
+  if (format != FileFormat::ply && format != FileFormat::pcd && format != FileFormat::xyz) {
+    throw InvalidSettingsError("--map-out " + o.map_out +
+                               ": the map is written as PLY, PCD or XYZ, give it a .ply, .pcd or "
+                               ".xyz name");
+  }
 }
 
 // The run in numbers: frames, failures, time per frame, map size, files written.
@@ -263,22 +282,20 @@ void print_run_summary(const OdometryOptions& o, const std::string& method,
                        const FrameSource& source, std::size_t frames, std::size_t unreadable,
                        const Odometry& odometry, std::chrono::steady_clock::time_point start) {
   std::vector<double> times_ms;
-  std::size_t failed = 0;
-  for (const auto& r : odometry.reports()) {
-    times_ms.push_back(r.time_ms);
-    failed += r.failed ? 1 : 0;
-  }
+  for (const auto& r : odometry.reports()) times_ms.push_back(r.time_ms);
   const double total_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::cout << std::setprecision(4) << "method: " << method << ", layout: " << source.layout
             << ", voxel " << odometry.voxel_size_m() << " m\n"
-            << "frames: " << frames << ", failed: " << failed << " (unreadable: " << unreadable
-            << "), time per frame: median " << median_of(times_ms) << " ms, max "
+            << "frames: " << frames << ", lost: " << odometry.lost_frames()
+            << " (unreadable: " << unreadable << "), recovered: " << odometry.recovered_frames()
+            << ", time per frame: median " << median_of(times_ms) << " ms, max "
             << *std::max_element(times_ms.begin(), times_ms.end()) << " ms, "
             << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
             << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
             << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
-            << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum) << '\n';
+            << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum)
+            << (o.map_out.empty() ? "" : ", map: " + o.map_out) << '\n';
 }
 
 // The errors against the ground truth when given, and the picture when asked for.
@@ -301,6 +318,7 @@ void run(const OdometryOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   const OdometrySettings settings = odometry_settings(o);
   if (!o.picture.empty()) check_picture_name(o.picture);
+  check_map_options(o);
   if (!(o.rate_hz >= 0.0 && std::isfinite(o.rate_hz))) {
     throw InvalidSettingsError("--rate " + format_number(o.rate_hz) + ": must be positive");
   }
@@ -369,8 +387,14 @@ void add_odometry_command(CLI::App& app) {
                   "and along y (x-z), with the ground truth when given (the estimate aligned "
                   "onto it as for the ATE)");
   cmd->add_option("--report", o->report,
-                  "Write one CSV row per frame (failed, converged, iterations, points, inliers, "
-                  "threshold, times, message)");
+                  "Write one CSV row per frame (failed, recovered, start, converged, iterations, "
+                  "points, overlap, inliers, threshold, times, message)");
+  cmd->add_option("--map-out", o->map_out,
+                  "Write the local map at the end (the first frame's coordinates, metres): PLY, "
+                  "PCD or XYZ by the extension");
+  cmd->add_option("--map-voxel", o->map_voxel_m,
+                  "Thin the written map to one centroid per voxel of this side, m [default: 0 = "
+                  "the map as kept, up to --max-points-per-voxel per map voxel]");
   cmd->add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
   for (const auto& s : odometry_settings_table()) {

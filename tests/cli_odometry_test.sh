@@ -32,7 +32,7 @@ if [ "$(grep -vc '^#' "$tmp/p.tum")" -eq 4 ] && [ "$(awk '!/^#/ { print NF; exit
 else
   fail "odometry --tum: $(cat "$tmp/p.tum" | head -c 400)"
 fi
-if grep -q 'frames: 4, failed: 0' "$tmp/out" && grep -q 'frames/s' "$tmp/err" &&
+if grep -q 'frames: 4, lost: 0' "$tmp/out" && grep -q 'frames/s' "$tmp/err" &&
   grep -q 'time per frame: median' "$tmp/out" && [ "$(grep -c . "$tmp/r.csv")" -eq 5 ]; then
   pass "odometry prints progress on stderr, a summary, and one report row per frame"
 else
@@ -42,12 +42,28 @@ fi
 # A bad file in the middle: reported, the predicted pose used, the run goes on.
 printf 'x y z\n1 2\n' >"$seq/frame_2.csv"
 run odometry "$seq" --poses-out "$tmp/p2.txt" --report "$tmp/r2.csv"
-if [ "$rc" -eq 0 ] && [ "$(grep -c . "$tmp/p2.txt")" -eq 4 ] && grep -q 'frame 2 (frame_2.csv): FAILED' "$tmp/err" &&
-  grep -q 'failed: 1 (unreadable: 1)' "$tmp/out" && grep -q '^2,frame_2.csv,1,' "$tmp/r2.csv"; then
-  pass "odometry: an unreadable frame is reported as failed and gets the prediction, not fatal"
+if [ "$rc" -eq 0 ] && [ "$(grep -c . "$tmp/p2.txt")" -eq 4 ] && grep -q 'frame 2 (frame_2.csv): LOST' "$tmp/err" &&
+  grep -q 'lost: 1 (unreadable: 1)' "$tmp/out" && grep -q '^2,frame_2.csv,1,' "$tmp/r2.csv"; then
+  pass "odometry: an unreadable frame is reported as lost and gets the prediction, not fatal"
 else
   fail "odometry with a bad frame (exit $rc): $(head -c 400 "$tmp/err")"
 fi
+
+# The map at the end, as PLY, and thinned: fewer points, every one finite.
+run odometry "$seq" --poses-out "$tmp/p3.txt" --map-out "$tmp/map.ply" -q
+run odometry "$seq" --poses-out "$tmp/p4.txt" --map-out "$tmp/map_thin.xyz" --map-voxel 0.5 -q
+full=$(awk '/^element vertex/ { print $3 }' "$tmp/map.ply" 2>/dev/null)
+thin=$(grep -c . "$tmp/map_thin.xyz" 2>/dev/null || echo 0)
+if [ "$rc" -eq 0 ] && grep -q "map: $tmp/map_thin.xyz" "$tmp/out" && [ "${full:-0}" -gt "$thin" ] &&
+  [ "$thin" -gt 0 ] && ! grep -qi 'nan\|inf' "$tmp/map_thin.xyz"; then
+  pass "odometry --map-out writes the map (PLY: $full points; --map-voxel 0.5: $thin)"
+else
+  fail "odometry --map-out (exit $rc): full ${full:-none}, thinned $thin: $(head -c 300 "$tmp/err")"
+fi
+expect_error "odometry --map-out with an unwritable format" '.ply, .pcd or .xyz' odometry "$seq" --poses-out "$tmp/m.txt" --map-out "$tmp/map.vtk"
+[ -e "$tmp/m.txt" ] && fail "odometry ran before refusing --map-out map.vtk" ||
+  pass "odometry refuses a --map-out it cannot write before the run"
+expect_error "odometry --map-voxel -1" '--map-voxel' odometry "$seq" --poses-out "$tmp/m.txt" --map-voxel -1
 
 mkdir -p "$tmp/empty" "$tmp/mixed"
 expect_error "odometry on a folder without frames" 'no frame file' odometry "$tmp/empty" --poses-out "$tmp/e.txt"
@@ -89,7 +105,7 @@ if [ -d "$KITTI/velodyne" ]; then
   run odometry "$KITTI" --poses-out "$tmp/k.txt" --tum "$tmp/k.tum" --ground-truth "$KITTI/poses_00.txt" \
     --ground-truth-prefix --ground-truth-calib "$KITTI/calib.txt"
   # The official poses are 0.15 m per frame off here (PROVENANCE.md): only loose checks.
-  if [ "$rc" -eq 0 ] && grep -q 'layout: kitti' "$tmp/out" && grep -q 'frames: 6, failed: 0' "$tmp/out" &&
+  if [ "$rc" -eq 0 ] && grep -q 'layout: kitti' "$tmp/out" && grep -q 'frames: 6, lost: 0' "$tmp/out" &&
     awk '!/^#/ { n++; if (n == 2 && $1 > 0.05 && $1 < 0.2) ok = 1 } END { exit !(ok && n == 6) }' "$tmp/k.tum" &&
     awk 'END { exit !($4 > 3.3 && $4 < 3.9) }' "$tmp/k.txt"; then
     pass "odometry on the KITTI scans: 6 frames, KITTI timestamps, 3.3-3.9 m forward (ICP reference 3.58 m)"
@@ -105,7 +121,7 @@ SEVEN="$SHARED/sevenscenes_redkitchen"
 if [ -f "$SEVEN/camera-intrinsics.txt" ]; then
   run odometry "$SEVEN" --max-frames 10 --max-range 5 --poses-out "$tmp/s.txt" --tum "$tmp/s.tum" \
     --ground-truth "$SEVEN" --ground-truth-prefix
-  if [ "$rc" -eq 0 ] && grep -q 'layout: 7scenes' "$tmp/out" && grep -q 'frames: 10, failed: 0' "$tmp/out" &&
+  if [ "$rc" -eq 0 ] && grep -q 'layout: 7scenes' "$tmp/out" && grep -q 'frames: 10, lost: 0' "$tmp/out" &&
     grep -q 'ATE (evo_ape' "$tmp/out" && [ "$(grep -c . "$tmp/s.txt")" -eq 10 ] &&
     awk '!/^#/ { n++; if (n == 2 && $1 > 0.033 && $1 < 0.034) ok = 1 } END { exit !ok }' "$tmp/s.tum"; then
     pass "odometry on 7-Scenes depth frames: 10 poses, TUM timestamps at 30 Hz, errors printed"

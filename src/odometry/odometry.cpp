@@ -162,6 +162,22 @@ std::string_view to_string(FrameStart start) noexcept {
   return "?";
 }
 
+PointCloud Odometry::map_cloud(double voxel_size_m) const {
+  if (!map_ || map_->empty()) return {};
+  PointCloud cloud = map_->points();
+  return voxel_size_m > 0.0 ? voxel_downsample(cloud, voxel_size_m) : cloud;
+}
+
+std::size_t Odometry::lost_frames() const noexcept {
+  return static_cast<std::size_t>(
+      std::count_if(reports_.begin(), reports_.end(), [](const auto& r) { return r.failed; }));
+}
+
+std::size_t Odometry::recovered_frames() const noexcept {
+  return static_cast<std::size_t>(
+      std::count_if(reports_.begin(), reports_.end(), [](const auto& r) { return r.recovered; }));
+}
+
 Eigen::Matrix4d Odometry::skip_frame(const std::string& message) {
   FrameReport report;
   report.failed = true;

@@ -178,6 +178,12 @@ class Odometry {
   [[nodiscard]] const std::vector<Eigen::Matrix4d>& poses() const noexcept { return poses_; }
   [[nodiscard]] const std::vector<FrameReport>& reports() const noexcept { return reports_; }
   [[nodiscard]] const VoxelMap* map() const noexcept { return map_ ? &*map_ : nullptr; }
+  /// The map's points (the first frame's coordinates, metres), thinned to one centroid per voxel
+  /// of voxel_size_m when it is above 0; empty before the first frame with points.
+  [[nodiscard]] PointCloud map_cloud(double voxel_size_m = 0.0) const;
+  /// Frames lost (no start registered them, or unreadable) and recovered (registered by a retry).
+  [[nodiscard]] std::size_t lost_frames() const noexcept;
+  [[nodiscard]] std::size_t recovered_frames() const noexcept;
   [[nodiscard]] const OdometrySettings& settings() const noexcept { return settings_; }
   /// The voxel size in use (the derived one once the first frame is in), metres.
   [[nodiscard]] double voxel_size_m() const noexcept { return voxel_size_m_; }
