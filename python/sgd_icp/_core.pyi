@@ -1448,7 +1448,21 @@ class FrameReport:
         """(4, 4) float64 pose of the frame in the first frame's coordinates."""
     @property
     def failed(self) -> bool:
-        """True if the pose is the constant-velocity prediction, not a registration (see message).
+        """True if the frame is lost: no start registered it, the pose is the constant-velocity
+        prediction (see message), and neither the map nor the motion model took it in.
+        """
+    @property
+    def recovered(self) -> bool:
+        """True if a retry registered the frame after the registration from the prediction was
+        rejected (message says why; start says which retry).
+        """
+    @property
+    def start(self) -> str:
+        """Where the accepted registration started: 'prediction', 'last pose' or 'wide basin'."""
+    @property
+    def overlap(self) -> float:
+        """Fraction of the registered frame's points with a map point within one map voxel (a frame
+        below half the recent frames' is rejected); 0 when not registered.
         """
     @property
     def converged(self) -> bool:
@@ -1495,7 +1509,7 @@ class Odometry:
         sgd-gicp, icp, icp-plane or gicp). Keywords: the odometry settings of `sgdicp odometry`
         (max_range (100 m), min_range (0 m), voxel_size (0 m), max_points_per_voxel (20),
         initial_threshold (0 m), min_motion (0 m), max_translation_per_frame (5 m),
-        max_rotation_per_frame (45 deg); 0 = derived from the first frame, docs/odometry.md) and
+        max_rotation_per_frame (180 deg); 0 = derived from the first frame, docs/odometry.md) and
         the keywords of register() for the method. max_distance= fixes d_max and turns the
         adaptive threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for
         an invalid value.
@@ -1524,6 +1538,17 @@ class Odometry:
     @property
     def map_points(self) -> int:
         """Points in the local map."""
+    def map_cloud(self, voxel_size: float = 0.0) -> npt.NDArray[np.float32]:
+        """The local map's points, an (N, 3) float32 array in the first frame's coordinates
+        (metres), thinned to one centroid per voxel of voxel_size metres when above 0 (as `sgdicp
+        odometry --map-out --map-voxel`).
+        """
+    @property
+    def lost_frames(self) -> int:
+        """Frames lost so far (no start registered them, or unreadable)."""
+    @property
+    def recovered_frames(self) -> int:
+        """Frames registered by a retry so far."""
     @property
     def method(self) -> str:
         """The registration method's name."""

@@ -1,5 +1,6 @@
 // sgd_icp.Odometry: the library's Odometry (odometry.hpp) fed one NumPy frame at a time, with the
 // keywords of the CLI's `sgdicp odometry` options (the odometry table, then the registration's).
+#include <cmath>
 #include <string>
 
 #include <pybind11/stl.h>
@@ -92,8 +93,19 @@ void bind_odometry(py::module_& m) {
           "T_first_frame", [](const FrameReport& r) { return array_from_matrix(r.T_first_frame); },
           "(4, 4) float64 pose of the frame in the first frame's coordinates.")
       .def_readonly("failed", &FrameReport::failed,
-                    "True if the pose is the constant-velocity prediction, not a registration "
-                    "(see message).")
+                    "True if the frame is lost: no start registered it, the pose is the "
+                    "constant-velocity prediction (see message), and neither the map nor the "
+                    "motion model took it in.")
+      .def_readonly("recovered", &FrameReport::recovered,
+                    "True if a retry registered the frame after the registration from the "
+                    "prediction was rejected (message says why; start says which retry).")
+      .def_property_readonly(
+          "start", [](const FrameReport& r) { return std::string(to_string(r.start)); },
+          "Where the accepted registration started: 'prediction', 'last pose' or 'wide basin'.")
+      .def_readonly("overlap", &FrameReport::overlap,
+                    "Fraction of the registered frame's points with a map point within one map "
+                    "voxel (a frame below half the recent frames' is rejected); 0 when not "
+                    "registered.")
       .def_readonly("converged", &FrameReport::converged,
                     "True if the registration's convergence test passed.")
       .def_readonly("message", &FrameReport::message,
@@ -181,6 +193,23 @@ void bind_odometry(py::module_& m) {
       .def_property_readonly(
           "map_points", [](const Odometry& o) { return o.map() ? o.map()->size() : 0; },
           "Points in the local map.")
+      .def(
+          "map_cloud",
+          [](const Odometry& o, double voxel_size) {
+            if (!(voxel_size >= 0.0 && std::isfinite(voxel_size))) {
+              throw InvalidSettingsError("voxel_size=" + format_number(voxel_size) +
+                                         ": must be 0 or a positive length in metres");
+            }
+            return array_from_cloud(o.map_cloud(voxel_size));
+          },
+          "voxel_size"_a = 0.0,
+          "The local map's points, an (N, 3) float32 array in the first frame's coordinates "
+          "(metres), thinned to one centroid per voxel of voxel_size metres when above 0 (as "
+          "`sgdicp odometry --map-out --map-voxel`).")
+      .def_property_readonly("lost_frames", &Odometry::lost_frames,
+                             "Frames lost so far (no start registered them, or unreadable).")
+      .def_property_readonly("recovered_frames", &Odometry::recovered_frames,
+                             "Frames registered by a retry so far.")
       .def_property_readonly(
           "method", [](const Odometry& o) { return std::string(o.method()); },
           "The registration method's name.")

@@ -78,6 +78,46 @@ def test_an_empty_frame_fails_and_gets_the_prediction():
     assert T4.shape == (4, 4)
 
 
+def test_a_frame_of_another_scene_is_lost_counted_and_kept_out_of_the_map():
+    clouds, truth = sequence(7)
+    odometry = sgd_icp.Odometry()
+    for cloud in clouds[:4]:
+        odometry.register_frame(cloud)
+    map_points = odometry.map_points
+    rng = np.random.default_rng(2)
+    ball = rng.normal(size=(6000, 3))
+    odometry.register_frame((2.0 * ball / np.linalg.norm(ball, axis=1, keepdims=True)).astype(np.float32))
+    lost = odometry.last_report
+    assert lost.failed and "lost" in lost.message and not lost.recovered
+    assert lost.overlap == 0.0
+    assert odometry.map_points == map_points
+    for cloud in clouds[4:]:
+        odometry.register_frame(cloud)
+        assert not odometry.last_report.failed, odometry.last_report.message
+    assert odometry.lost_frames == 1
+    assert odometry.recovered_frames == sum(r.recovered for r in odometry.reports)
+    assert {r.start for r in odometry.reports} <= {"prediction", "last pose", "wide basin"}
+    end_error = np.linalg.inv(truth[-1]) @ odometry.poses[-1]
+    assert np.linalg.norm(end_error[:3, 3]) < 0.05
+
+
+def test_the_map_as_an_array():
+    clouds, _ = sequence(4)
+    odometry = sgd_icp.Odometry()
+    assert odometry.map_cloud().shape == (0, 3)
+    for cloud in clouds:
+        odometry.register_frame(cloud)
+    full = odometry.map_cloud()
+    assert full.shape == (odometry.map_points, 3) and full.dtype == np.float32
+    assert np.isfinite(full).all()
+    thin = odometry.map_cloud(voxel_size=0.5)
+    assert 0 < len(thin) < len(full)
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="voxel_size"):
+        odometry.map_cloud(voxel_size=-1.0)
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="voxel_size"):
+        odometry.map_cloud(voxel_size=float("nan"))
+
+
 def test_keywords_are_the_cli_options():
     odometry = sgd_icp.Odometry(method="icp", voxel_size=0.5, max_points_per_voxel=5, max_iterations=30)
     assert odometry.method == "icp"
