@@ -5,7 +5,9 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <random>
 #include <sstream>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -42,6 +44,43 @@ TEST(VoxelMap, KeepsAtMostTheBoundPerVoxel) {
   map.add(c);                 // seen again: the full voxel takes no more, the other one more
   EXPECT_EQ(map.size(), 5U);
   EXPECT_EQ(map.points().size(), 5U);
+}
+
+// admitted() names exactly the points add() keeps: random points over a few voxels, some full,
+// some filled by the same cloud, one non-finite.
+TEST(VoxelMap, AdmittedAreThePointsAddKeeps) {
+  std::mt19937_64 rng(4);
+  VoxelMap map(1.0, 5);
+  for (int round = 0; round < 4; ++round) {
+    PointCloud c;
+    for (int i = 0; i < 60; ++i) {
+      c.points.emplace_back(Eigen::Vector3d(test::uniform(rng, -2, 2), test::uniform(rng, -1, 1),
+                                            test::uniform(rng, 0, 1))
+                                .cast<float>());
+    }
+    c.points[7] = Eigen::Vector3f(std::nanf(""), 0.0F, 0.0F);
+    const std::vector<std::uint32_t> admitted = map.admitted(c);
+    PointCloud expected;
+    for (const std::uint32_t i : admitted) expected.points.push_back(c.points[i]);
+    const std::vector<Eigen::Vector3f> before = map.points().points;
+    const std::size_t size = map.size();
+    map.add(c);
+    EXPECT_EQ(map.size(), size + admitted.size()) << round;
+    // Adding only the admitted points to the map as it was gives the same map.
+    VoxelMap rebuilt(1.0, 5);
+    rebuilt.add(cloud_of({}));
+    PointCloud old;
+    old.points = before;
+    rebuilt.add(old);
+    rebuilt.add(expected);
+    auto sorted = [](std::vector<Eigen::Vector3f> v) {
+      std::sort(v.begin(), v.end(), [](const auto& a, const auto& b) {
+        return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+      });
+      return v;
+    };
+    EXPECT_EQ(sorted(rebuilt.points().points), sorted(map.points().points)) << round;
+  }
 }
 
 TEST(VoxelMap, NegativeCoordinatesGetTheirOwnVoxels) {

@@ -457,4 +457,35 @@ TEST(Settings, BadSettingsAndInputThrowAndLeaveTheCloudUnchanged) {
   EXPECT_TRUE(bad.normals.empty());
 }
 
+// The surfaces of a subset are those the whole cloud's estimate gives its points (the odometry
+// estimates them only for the points its map admits).
+TEST(SubsetWithSurfaces, EqualTheWholeCloudsEstimateAtThosePoints) {
+  std::mt19937_64 rng(12);
+  const PointCloud cloud =
+      random_box(rng, 3000, Eigen::Vector3d::Zero(), Eigen::Vector3d(2, 2, 0.2));
+  NeighborhoodSettings settings;
+  settings.flat_k = 10;
+  PointCloud whole = cloud;
+  sgdicp::estimate_covariances(whole, settings);
+  const std::vector<std::uint32_t> which{2999, 0, 17, 17, 1500};
+  for (const bool covariances : {false, true}) {
+    const PointCloud subset = sgdicp::subset_with_surfaces(cloud, which, settings, covariances);
+    ASSERT_EQ(subset.size(), which.size());
+    EXPECT_EQ(subset.has_covariances(), covariances);
+    for (std::size_t j = 0; j < which.size(); ++j) {
+      EXPECT_EQ(subset.points[j], cloud.points[which[j]]);
+      EXPECT_EQ(subset.normals[j], whole.normals[which[j]]) << j;
+      if (covariances) {
+        EXPECT_EQ(subset.covariances[j], whole.covariances[which[j]]) << j;
+      }
+    }
+  }
+  EXPECT_TRUE(sgdicp::subset_with_surfaces(cloud, {}, settings, false).empty());
+  EXPECT_THROW((void)sgdicp::subset_with_surfaces(cloud, {3000}, settings, false),
+               InvalidInputError);
+  settings.k = 0;
+  EXPECT_THROW((void)sgdicp::subset_with_surfaces(cloud, {1}, settings, false),
+               InvalidSettingsError);
+}
+
 }  // namespace

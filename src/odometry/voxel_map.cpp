@@ -52,6 +52,22 @@ void VoxelMap::add(const PointCloud& cloud) {
   }
 }
 
+std::vector<std::uint32_t> VoxelMap::admitted(const PointCloud& cloud) const {
+  std::vector<std::uint32_t> out;
+  std::unordered_map<Key, std::size_t, KeyHash> added;  // by this cloud, per voxel
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    if (!p.allFinite()) continue;
+    const Key key = key_of(p);
+    const auto it = voxels_.find(key);
+    std::size_t& mine = added[key];
+    if ((it == voxels_.end() ? 0 : it->second.points.size()) + mine >= max_points_) continue;
+    ++mine;
+    out.push_back(static_cast<std::uint32_t>(i));
+  }
+  return out;
+}
+
 void VoxelMap::remove_far_from(const Eigen::Vector3d& centre_m, double radius_m) {
   const double r2 = radius_m * radius_m;
   for (auto it = voxels_.begin(); it != voxels_.end();) {

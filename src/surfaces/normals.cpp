@@ -196,21 +196,30 @@ void validate_index(const PointCloud& cloud, const ReferenceIndex& index) {
   }
 }
 
+// The surfaces of the points `which` (all when null) of the indexed cloud, in that order.
+void estimate_at(const ReferenceIndex& index, const std::vector<std::uint32_t>* which,
+                 const NeighborhoodSettings& stored, std::size_t num_threads,
+                 std::vector<Eigen::Vector3f>& normals, std::vector<Eigen::Matrix3f>* covariances) {
+  const std::size_t n = which ? which->size() : index.size();
+  normals.resize(n);
+  if (covariances) covariances->resize(n);
+  parallel_chunks(n, resolve_threads(num_threads, n), [&](std::size_t begin, std::size_t end) {
+    std::vector<Neighbor> neighbors;  // one per thread, reused
+    for (std::size_t j = begin; j < end; ++j) {
+      const std::size_t i = which ? (*which)[j] : j;
+      const PointSurface s = detail::estimate_surface(index, i, stored, neighbors);
+      normals[j] = s.normal;
+      if (covariances) (*covariances)[j] = s.covariance;
+    }
+  });
+}
+
 void estimate(PointCloud& cloud, const ReferenceIndex& index, const NeighborhoodSettings& settings,
               bool with_covariances) {
-  const NeighborhoodSettings stored = detail::in_stored_frame(settings, cloud);
-  const std::size_t n = cloud.size();
-  std::vector<Eigen::Vector3f> normals(n);
-  std::vector<Eigen::Matrix3f> covariances(with_covariances ? n : 0);
-  parallel_chunks(n, resolve_threads(settings.num_threads, n),
-                  [&](std::size_t begin, std::size_t end) {
-                    std::vector<Neighbor> neighbors;  // one per thread, reused
-                    for (std::size_t i = begin; i < end; ++i) {
-                      const PointSurface s = detail::estimate_surface(index, i, stored, neighbors);
-                      normals[i] = s.normal;
-                      if (with_covariances) covariances[i] = s.covariance;
-                    }
-                  });
+  std::vector<Eigen::Vector3f> normals;
+  std::vector<Eigen::Matrix3f> covariances;
+  estimate_at(index, nullptr, detail::in_stored_frame(settings, cloud), settings.num_threads,
+              normals, with_covariances ? &covariances : nullptr);
   // Only now touch the cloud, so that it is unchanged if anything above threw.
   cloud.normals = std::move(normals);
   if (with_covariances) cloud.covariances = std::move(covariances);
@@ -255,6 +264,26 @@ void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
   validate(cloud);
   validate_index(cloud, index);
   estimate(cloud, index, settings, false);
+}
+
+PointCloud subset_with_surfaces(const PointCloud& cloud, const std::vector<std::uint32_t>& which,
+                                const NeighborhoodSettings& settings, bool with_covariances) {
+  check_neighborhood(settings);
+  PointCloud out;
+  out.origin_m = cloud.origin_m;
+  if (which.empty()) return out;
+  validate(cloud);
+  out.points.reserve(which.size());
+  for (const std::uint32_t i : which) {
+    if (i >= cloud.size()) {
+      throw InvalidInputError("subset_with_surfaces: index " + std::to_string(i) +
+                              " beyond the cloud's " + std::to_string(cloud.size()) + " points");
+    }
+    out.points.push_back(cloud.points[i]);
+  }
+  estimate_at(build_index(cloud), &which, detail::in_stored_frame(settings, cloud),
+              settings.num_threads, out.normals, with_covariances ? &out.covariances : nullptr);
+  return out;
 }
 
 }  // namespace sgdicp

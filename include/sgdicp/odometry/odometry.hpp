@@ -208,6 +208,10 @@ class Odometry {
   /// recent frames'.
   [[nodiscard]] std::string judge(const RegistrationResult& r, double overlap) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
+  /// Adds the frame's points at pose T, with the normals or covariances the cost needs.
+  void add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T);
+  [[nodiscard]] CostType cost() const;
+  [[nodiscard]] const NeighborhoodSettings& neighborhood() const;
 
   OdometrySettings settings_;
   const Method* method_;

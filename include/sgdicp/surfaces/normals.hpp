@@ -77,4 +77,14 @@ void estimate_normals(PointCloud& cloud, const NeighborhoodSettings& settings = 
 void estimate_normals(PointCloud& cloud, const ReferenceIndex& index,
                       const NeighborhoodSettings& settings = {});
 
+/// The points `which` of `cloud` (indices, each below cloud.size()) as a cloud of their own, with
+/// their normals, and their covariances when with_covariances, each estimated from its
+/// neighbourhood in the whole cloud: the same surfaces estimate_normals / estimate_covariances
+/// give those points, without estimating the others'. Throws as estimate_covariances, and
+/// InvalidInputError for an index out of range.
+[[nodiscard]] PointCloud subset_with_surfaces(const PointCloud& cloud,
+                                              const std::vector<std::uint32_t>& which,
+                                              const NeighborhoodSettings& settings,
+                                              bool with_covariances);
+
 }  // namespace sgdicp
