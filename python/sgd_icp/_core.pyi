@@ -792,6 +792,11 @@ class BatchSettings:
     def __deepcopy__(self, memo: Any) -> BatchSettings: ...
 
 
+# The settings table's keywords (keyword, kind, enum class name of a choice) for
+# python/tools/stub_signatures.py, which writes the keyword parameters of this stub from them.
+def _settings_keywords(solver: Literal["sgd", "batch"]) -> list[tuple[str, str, str | None]]: ...
+
+
 # ---- registration
 
 

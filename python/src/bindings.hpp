@@ -87,7 +87,7 @@ template <typename E>
 [[nodiscard]] std::string keyword_of(std::string_view name);
 
 // ---- settings (settings.cpp: the classes; keywords.cpp: the keyword overrides;
-// settings_docs.cpp: the docstrings from the settings table)
+// settings_docs.cpp: the docstrings from the settings table, and its keywords for the stub)
 
 /// Binds Distance, DistanceUnit, OptimizerType, ScalingOrigin and the settings classes
 /// (Settings, BatchSettings and their parts), then documents them (document_settings).
@@ -96,6 +96,10 @@ void bind_settings(py::module_& m);
 /// Gives every attribute that the library's settings tables describe its docstring from its table
 /// entry (help, unit, range, keyword, default); the classes bind those with an empty docstring.
 void document_settings(py::module_& m);
+
+/// Binds _settings_keywords(solver): the keywords of the settings tables with their kinds, from
+/// which python/tools/stub_signatures.py writes the keyword parameters of the type stub.
+void bind_settings_keywords(py::module_& m);
 
 /// A value as Python writes it, for repr and "Default X." (which the package tests evaluate):
 /// enums as Class.member, arrays as tuples.

@@ -472,6 +472,7 @@ void bind_settings(py::module_& m) {
   bind_sgd_settings(m);
   bind_batch_settings(m);
   document_settings(m);
+  bind_settings_keywords(m);
 }
 
 }  // namespace sgdicp::python

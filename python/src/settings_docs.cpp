@@ -1,6 +1,6 @@
 // The library's settings table (settings.hpp) as Python text: each settings attribute's
 // docstring (help, unit, range, keyword, default) and the keyword lists of register()'s docstring,
-// so that the text has one source.
+// so that the text has one source; and as data, for the keyword parameters of the type stub.
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,17 +35,28 @@ std::string class_of(std::string_view field, std::string_view top) {
   return "NeighborhoodSettings";
 }
 
-// The docstring of a setting's attribute: the table's help, range and unit, and the default read
-// from a default-constructed `defaults`.
+// The value of a setting's member (its field, e.g. "optimizer.type") in `defaults`.
 template <typename S>
-std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
+py::object value_of(const Setting<S>& s, const py::object& defaults) {
   py::object value = defaults;
   std::string_view rest = s.field;
   for (auto dot = rest.find('.'); dot != std::string_view::npos; dot = rest.find('.')) {
     value = value.attr(std::string(rest.substr(0, dot)).c_str());
     rest = rest.substr(dot + 1);
   }
-  value = value.attr(std::string(rest).c_str());
+  return value.attr(std::string(rest).c_str());
+}
+
+// The name of the Python class of a value (the enum of a choice).
+std::string class_name(const py::object& value) {
+  return py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>();
+}
+
+// The docstring of a setting's attribute: the table's help, range and unit, and the default read
+// from a default-constructed `defaults`.
+template <typename S>
+std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
+  const py::object value = value_of(s, defaults);
   std::string doc(s.help);
   switch (s.kind) {
     case SettingKind::count:
@@ -57,8 +68,7 @@ std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
              s.metres_range.to_string() + " m";
       break;
     case SettingKind::choice:
-      doc += " (" + py::str(py::type::handle_of(value).attr("__name__")).cast<std::string>() +
-             " or one of its names)";
+      doc += " (" + class_name(value) + " or one of its names)";
       break;
     case SettingKind::flag:
       break;
@@ -115,6 +125,42 @@ std::string summary_of(const std::vector<Setting<S>>& table, const py::object& d
   return out + line;
 }
 
+// The kind as Python code names it.
+constexpr std::string_view kind_name(SettingKind kind) {
+  switch (kind) {
+    case SettingKind::count:
+      return "count";
+    case SettingKind::real:
+      return "real";
+    case SettingKind::flag:
+      return "flag";
+    case SettingKind::distance:
+      return "distance";
+    case SettingKind::choice:
+      break;
+  }
+  return "choice";
+}
+
+// The keywords that the overrides of a table accept (keywords.cpp), in table order, as
+// (keyword, kind, the enum class of a choice or None); max_distance_unit, the unit of the
+// distances given as numbers, follows the first distance.
+template <typename S>
+py::list keyword_rows(const std::vector<Setting<S>>& table, const py::object& defaults) {
+  py::list rows;
+  bool unit_listed = false;
+  for (const auto& s : table) {
+    py::object choice = py::none();
+    if (s.kind == SettingKind::choice) choice = py::str(class_name(value_of(s, defaults)));
+    rows.append(py::make_tuple(keyword_of(s.name), kind_name(s.kind), choice));
+    if (s.kind == SettingKind::distance && !unit_listed) {
+      rows.append(py::make_tuple("max_distance_unit", "choice", "DistanceUnit"));
+      unit_listed = true;
+    }
+  }
+  return rows;
+}
+
 }  // namespace
 
 std::string keyword_summary(const py::module_& core, Solver solver, std::string_view indent) {
@@ -127,6 +173,21 @@ std::string keyword_summary(const py::module_& core, Solver solver, std::string_
 void document_settings(py::module_& m) {
   document_attributes(m, sgd_settings_table(), "Settings");
   document_attributes(m, batch_settings_table(), "BatchSettings");
+}
+
+void bind_settings_keywords(py::module_& m) {
+  m.def(
+      "_settings_keywords",
+      [](const std::string& solver) {
+        if (solver == "sgd")
+          return keyword_rows(sgd_settings_table(), py::type::of<SgdSettings>()());
+        if (solver != "batch") throw py::value_error("solver must be 'sgd' or 'batch'");
+        return keyword_rows(batch_settings_table(), py::type::of<BatchSettings>()());
+      },
+      py::arg("solver"),
+      "The keywords of Settings(**overrides) (solver 'sgd') or BatchSettings(**overrides) "
+      "('batch') as (keyword, kind, enum class name or None) in the table's order; kind is "
+      "'count', 'real', 'flag', 'distance' or 'choice'. Read by python/tools/stub_signatures.py.");
 }
 
 }  // namespace sgdicp::python
