@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
-"""Keeps the docstrings of sgd_icp/_core.pyi equal to the module's own.
+"""Keeps the docstrings and settings keywords of sgd_icp/_core.pyi equal to the module's own.
 
 The stub is written by hand for what only it can say (the types of every parameter, attribute and
-return value); its docstrings are not: they are copied from the built module, which holds the
-one text (most of it from the C++ library's tables). Run after changing a docstring in the
-bindings:
+return value), but two parts of it are not: its docstrings are copied from the built module, which
+holds the one text (most of it from the C++ library's tables), and the keyword parameters of the
+functions that take the flat settings keywords (Settings(), Settings.paper, register(), ...) are
+written from the module's settings table by stub_signatures.py. Run it with the package built and
+installed, after changing a docstring in the bindings or a setting in the settings table:
 
     python python/tools/sync_stub.py            # rewrites python/sgd_icp/_core.pyi
-    python python/tools/sync_stub.py --check    # exit 1 listing the docstrings that differ
+    python python/tools/sync_stub.py --check    # exit 1 listing what differs
 
 tests/python/test_package.py runs the check against the installed stub.
 """
@@ -23,6 +25,8 @@ import sys
 import textwrap
 from pathlib import Path
 from types import ModuleType
+
+import stub_signatures
 
 SOURCE_STUB = Path(__file__).resolve().parents[1] / "sgd_icp" / "_core.pyi"
 WIDTH = 100
@@ -146,11 +150,13 @@ def main() -> int:
 
     text = args.stub.read_text()
     if args.check:
-        names = differences(text, _core)
-        for name in names:
-            print(f"{args.stub}: docstring of {name} differs from the module's")
-        return 1 if names else 0
-    args.stub.write_text(synced(text, _core))
+        found = [f"docstring of {name} differs from the module's"
+                 for name in differences(text, _core)]
+        found += stub_signatures.differences(text, _core)
+        for difference in found:
+            print(f"{args.stub}: {difference}")
+        return 1 if found else 0
+    args.stub.write_text(synced(stub_signatures.written(text, _core), _core))
     return 0
 
 

@@ -4,14 +4,19 @@ from __future__ import annotations
 
 import ast
 import enum
+import importlib
 import inspect
+import re
+import subprocess
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import sgd_icp
 from sgd_icp import _core
 
 STUB = Path(_core.__file__).with_name("_core.pyi")
+TOOLS = Path(__file__).resolve().parents[2] / "python" / "tools"
 
 
 def stub_names() -> dict[str, set[str]]:
@@ -62,12 +67,13 @@ def test_stubs_match_the_module():
 
 
 def stub_literal(alias: str) -> list[str]:
-    """The strings of a `NAME = Literal[...]` alias of the stub."""
+    """The strings of the Literal[...] in a `NAME = ...` alias of the stub."""
     for node in ast.parse(STUB.read_text()).body:
         if isinstance(node, ast.Assign) and node.targets[0].id == alias:
-            elements = node.value.slice.elts
-            return [e.value for e in elements]
-    raise AssertionError(f"{alias} not in the stub")
+            for part in ast.walk(node.value):
+                if isinstance(part, ast.Subscript) and getattr(part.value, "id", "") == "Literal":
+                    return [e.value for e in part.slice.elts]
+    raise AssertionError(f"{alias} has no Literal in the stub")
 
 
 def test_stub_literals_name_every_choice():
@@ -75,18 +81,94 @@ def test_stub_literals_name_every_choice():
     assert stub_literal("_UncertaintyName") == list(sgd_icp.UncertaintyType.__members__)
 
 
+def tool(name: str) -> ModuleType:
+    """A module of python/tools (the stub's generator), which the package does not install."""
+    sys.path.insert(0, str(TOOLS))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(str(TOOLS))
+
+
 def test_stub_docstrings_are_the_modules():
     # The stub adds the types; its docstrings are copies of the module's, made by
     # python/tools/sync_stub.py (run it after changing a docstring in the bindings).
-    tools = Path(__file__).resolve().parents[2] / "python" / "tools"
-    sys.path.insert(0, str(tools))
-    try:
-        import sync_stub
-    finally:
-        sys.path.remove(str(tools))
-    assert sync_stub.differences(STUB.read_text(), _core) == [], (
+    assert tool("sync_stub").differences(STUB.read_text(), _core) == [], (
         "run python/tools/sync_stub.py to copy the module's docstrings into the stub"
     )
+
+
+def test_stub_keywords_are_the_settings_tables():
+    # The keyword parameters of Settings(), register() etc. are written from the module's
+    # settings table by python/tools/stub_signatures.py (through sync_stub.py).
+    assert tool("stub_signatures").differences(STUB.read_text(), _core) == [], (
+        "run python/tools/sync_stub.py to write the settings keywords into the stub"
+    )
+
+
+def run_check(stub_text: str, tmp_path: Path) -> subprocess.CompletedProcess:
+    """sync_stub.py --check on a copy of the stub with `stub_text`."""
+    stub = tmp_path / "_core.pyi"
+    stub.write_text(stub_text)
+    return subprocess.run([sys.executable, str(TOOLS / "sync_stub.py"), "--check", "--stub",
+                           str(stub)], capture_output=True, text=True, check=False)
+
+
+def test_check_fails_on_a_keyword_the_stub_lacks(tmp_path):
+    text = STUB.read_text()
+    line = "        settle_tolerance: float = ...,\n"
+    assert line in text
+    result = run_check(text.replace(line, "", 1), tmp_path)  # from Settings.__init__ only
+    assert result.returncode == 1
+    assert result.stdout.splitlines() == [
+        f"{tmp_path / '_core.pyi'}: Settings.__init__: keyword settle_tolerance= of the table is "
+        "missing"
+    ]
+    assert run_check(text, tmp_path).returncode == 0
+
+
+def test_check_fails_on_a_keyword_typed_apart_from_the_table():
+    text = STUB.read_text()
+    line = "\n    trim: float = ...,\n"  # register's, the one at the top level
+    assert text.count(line) == 1
+    text = text.replace(line, "\n    trim: int = ...,\n")
+    assert tool("stub_signatures").differences(text, _core) == [
+        "register: keyword trim= is typed int, the table makes it float"
+    ]
+
+
+def test_check_fails_on_keywords_out_of_the_table_order():
+    # optimizer= before learning_rate=, the order in which they are applied.
+    text = STUB.read_text()
+    pair = "        optimizer: _OptimizerName = ...,\n        learning_rate: float = ...,\n"
+    swapped = "        learning_rate: float = ...,\n        optimizer: _OptimizerName = ...,\n"
+    assert tool("stub_signatures").differences(text.replace(pair, swapped, 1), _core) == [
+        "Settings.__init__: the keywords' order, defaults or layout are not the table's"
+    ]
+
+
+class CoreWithANewSetting:
+    """The module with one more setting in the SGD table, as after adding one to the C++ table."""
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(_core, name)
+
+    @staticmethod
+    def _settings_keywords(solver: str) -> list[tuple[str, str, str | None]]:
+        extra = [("new_knob", "real", None)] if solver == "sgd" else []
+        return _core._settings_keywords(solver) + extra
+
+
+def test_a_new_setting_is_missing_from_the_stub_until_it_is_regenerated():
+    signatures = tool("stub_signatures")
+    core = CoreWithANewSetting()
+    missing = signatures.differences(STUB.read_text(), core)
+    assert missing == [f"{name}: keyword new_knob= of the table is missing" for name in (
+        "Settings.__init__", "Settings.paper", "Settings.replace", "register",
+        "ReferenceIndex.for_registration")]
+    regenerated = signatures.written(STUB.read_text(), core)
+    assert signatures.differences(regenerated, core) == []
+    assert "        new_knob: float = ...,\n    ) -> Settings:" in regenerated
 
 
 def test_setting_docstrings_come_from_the_library_table():
@@ -128,8 +210,6 @@ def test_register_docstring_lists_every_keyword_with_its_default():
 
 def documented_defaults(doc: str) -> list[str]:
     """The literals of 'Default X.' in a docstring (X without spaces)."""
-    import re
-
     return re.findall(r"Default (\S+?)\.(?:\s|$)", doc)
 
 
@@ -178,9 +258,6 @@ def test_documented_defaults_are_the_real_ones():
 
 
 def test_one_version_for_cmake_cli_and_package():
-    import re
-    import subprocess
-
     from conftest import REPO_ROOT, find_cli
 
     cmake = (REPO_ROOT / "CMakeLists.txt").read_text()
