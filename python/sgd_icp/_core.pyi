@@ -26,7 +26,7 @@ _CostName = Union["CostType", str]
 _KernelName = Union["KernelType", str]
 _UnitName = Union["DistanceUnit", str]
 _DistanceValue = Union[float, "Distance"]
-_MethodName = Literal["sgd", "sgd-plane", "sgd-gicp", "icp", "icp-plane", "gicp"]
+_MethodName = Literal["sgd", "sgd-point", "sgd-plane", "sgd-gicp", "icp", "icp-plane", "gicp"]
 _UncertaintyName = Union["UncertaintyType", Literal["none", "laplace", "sgld", "svgd"]]
 
 # ---- errors

@@ -12,6 +12,9 @@ import sys
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
+import pytest
+
 import sgd_icp
 from sgd_icp import _core
 
@@ -77,8 +80,13 @@ def stub_literal(alias: str) -> list[str]:
 
 
 def test_stub_literals_name_every_choice():
-    # A name list kept by hand in the stub must follow the module's enum (svgd was missing).
+    # A name list kept by hand in the stub must follow the module's enum (svgd was missing) or
+    # method table (sgd-point was missing), which the error for an unknown name lists.
     assert stub_literal("_UncertaintyName") == list(sgd_icp.UncertaintyType.__members__)
+    with pytest.raises(sgd_icp.InvalidSettingsError) as error:
+        sgd_icp.register(np.zeros((8, 3)), np.zeros((8, 3)), method="none")
+    listed = re.search(r"\(expected (.*)\)", str(error.value)).group(1)
+    assert stub_literal("_MethodName") == re.split(r", | or ", listed)
 
 
 def tool(name: str) -> ModuleType:
