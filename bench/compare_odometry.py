@@ -1,33 +1,47 @@
 #!/usr/bin/env python3
-"""sgd-icp odometry against KISS-ICP on the same frames, one run: RPE, ATE, end drift, time per
-frame, and the agreement of the two trajectories.
+"""sgd-icp odometry against KISS-ICP on the same frames, one run: lost frames, RPE, end drift and
+whole-run wall time (reading included on both sides), per sequence and frame rate.
 
-    python bench/compare_odometry.py ../shared/data/kitti_odometry_seq00 [--methods sgd,icp-plane]
-    python bench/compare_odometry.py ../shared/data/sevenscenes_redkitchen --max-frames 100
+    python bench/compare_odometry.py ../shared/data/balm_handheld_lidar \\
+        ../shared/data/sevenscenes_redkitchen --steps 1,2,3
+    python bench/compare_odometry.py ../shared/data/kitti_odometry_seq00 --methods sgd,icp-plane
 
-The frames are those of a KITTI sequence folder (velodyne/*.bin) or of a 7-Scenes folder
-(frame-*.depth.png back-projected with camera-intrinsics.txt; reference: its frame-*.pose.txt,
-re-orthonormalised). For the Kinect KISS-ICP gets max range 5 m (voxel 5 cm by its rule),
-initial threshold 0.1 m and min motion 0.005 m (its LiDAR defaults, 2 m and 0.1 m, are larger
-than the whole motion). The reference trajectory is the
-maintainers' ICP pseudo ground truth of reference_relative_poses_icp.txt when present (the
-official poses are 0.15 m per frame off for frames 0-10, PROVENANCE.md), else poses_*.txt moved
-into the scanner frame with calib.txt's Tr. KISS-ICP is run with its own defaults (max range
-100 m, voxel max_range / 100 = 1 m, 20 points per voxel, adaptive threshold from 2 m), deskewing
-off (the scans come without per-point times and sgd-icp does not deskew), on one thread (as
-sgd-icp), and once more with sgd-icp's voxel size. Metrics are computed here, in NumPy, as
-docs/odometry.md defines them (independently of the library's trajectory_metrics).
+A sequence folder is one of:
+- a 7-Scenes folder: frame-*.depth.png back-projected with camera-intrinsics.txt, reference its
+  frame-*.pose.txt (re-orthonormalised);
+- a folder of scans/*.bin (KITTI Velodyne layout) with poses.txt, one 3x4 world pose per scan
+  (the hand-held LiDAR of ../shared/data/balm_handheld_lidar);
+- a KITTI sequence folder (velodyne/*.bin): reference the maintainers' ICP pseudo ground truth of
+  reference_relative_poses_icp.txt when present (the official poses are 0.15 m per frame off for
+  frames 0-10, PROVENANCE.md), else poses_*.txt moved into the scanner frame with calib.txt's Tr.
+
+`--steps 1,2,3` runs every frame, every second and every third (30/15/10 Hz for a Kinect,
+2/1/0.67 Hz for the hand-held LiDAR). A frame is lost when its relative pose error against the
+reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: sgd-icp reads with
+sgd_icp.read_points / read_depth_image; KISS-ICP reads the .bin with NumPy and decodes the depth
+PNG with Pillow and back-projects it in NumPy (its own loaders do the same).
+
+KISS-ICP (pip kiss-icp) is configured for each sensor: deskewing off (the scans come without
+per-point times and sgd-icp does not deskew), one thread (as sgd-icp); max range 100 m for
+LiDAR (its default), 5 m for the Kinect with initial threshold 0.1 m and min motion 0.005 m (its
+LiDAR defaults, 2 m and 0.1 m, are larger than the whole motion); voxel its own rule (max range /
+100), and once more with sgd-icp's voxel size. sgd-icp runs with its defaults. Metrics are
+computed here in NumPy, independently of the library's trajectory_metrics.
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 import sgd_icp
+
+LOST_M, LOST_DEG = 0.20, 2.0
 
 
 def orthonormal(T: np.ndarray) -> np.ndarray:
@@ -37,12 +51,21 @@ def orthonormal(T: np.ndarray) -> np.ndarray:
     return out
 
 
-def read_reference(folder: Path, frames: int) -> tuple[np.ndarray, str]:
-    """Poses T_0_k of the scanner (frame 0 at the identity) and where they came from."""
-    poses7 = sorted(folder.glob("frame-*.pose.txt"))
-    if poses7:
-        P = np.array([orthonormal(np.loadtxt(f)) for f in poses7[:frames]])
-        return np.linalg.inv(P[0]) @ P, "7-Scenes pose files (dense tracking)"
+def homogeneous(rows: np.ndarray) -> np.ndarray:
+    P = rows.reshape(-1, 3, 4)
+    return np.concatenate([P, np.tile([[[0, 0, 0, 1.0]]], (len(P), 1, 1))], axis=1)
+
+
+@dataclass
+class Sequence:
+    name: str
+    files: list[Path]
+    reference: np.ndarray  # T_0_k of the sensor, frame 0 at the identity
+    kinect: bool
+    intrinsics: Path | None = None
+
+
+def kitti_reference(folder: Path, frames: int) -> np.ndarray:
     ref = folder / "reference_relative_poses_icp.txt"
     if ref.is_file():
         pairs = {}
@@ -57,16 +80,32 @@ def read_reference(folder: Path, frames: int) -> tuple[np.ndarray, str]:
         for k in range(1, frames):
             # Direct (0, k) when measured, else chained from the previous frame.
             poses.append(pairs[(0, k)] if (0, k) in pairs else poses[k - 1] @ pairs[(k - 1, k)])
-        return np.array(poses), "ICP pseudo ground truth (reference_relative_poses_icp.txt)"
-    gt = sorted(folder.glob("poses*.txt"))[0]
-    P = np.loadtxt(gt)[:frames].reshape(-1, 3, 4)
-    P = np.concatenate([P, np.tile([[[0, 0, 0, 1.0]]], (len(P), 1, 1))], axis=1)
+        return np.array(poses)
+    P = homogeneous(np.loadtxt(sorted(folder.glob("poses*.txt"))[0])[:frames])
     Tr = np.eye(4)
     for line in (folder / "calib.txt").read_text().splitlines():
         if line.startswith("Tr:"):
             Tr[:3, :] = np.array(line.split()[1:13], dtype=float).reshape(3, 4)
-    P = np.linalg.inv(Tr) @ np.linalg.inv(P[0]) @ P @ Tr
-    return P, f"official poses ({gt.name}) in the scanner frame"
+    return np.linalg.inv(Tr) @ np.linalg.inv(P[0]) @ P @ Tr
+
+
+def open_sequence(folder: Path, step: int, max_frames: int) -> Sequence:
+    depth = sorted(folder.glob("frame-*.depth.png"))
+    if depth:
+        files = depth[::step]
+        P = np.array([orthonormal(np.loadtxt(str(f).replace(".depth.png", ".pose.txt"))) for f in files])
+        kinect, K = True, folder / "camera-intrinsics.txt"
+    elif (folder / "scans").is_dir():
+        every = sorted((folder / "scans").glob("*.bin"))
+        P = homogeneous(np.loadtxt(folder / "poses.txt"))[: len(every)][::step]
+        files, kinect, K = every[::step], False, None
+    else:
+        every = sorted((folder / "velodyne").glob("*.bin"))
+        P = kitti_reference(folder, len(every))[::step]
+        files, kinect, K = every[::step], False, None
+    if max_frames:
+        files, P = files[:max_frames], P[:max_frames]
+    return Sequence(f"{folder.name} every {step}", files, np.linalg.inv(P[0]) @ P, kinect, K)
 
 
 def angle_deg(R: np.ndarray) -> float:
@@ -78,100 +117,106 @@ def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, float]:
     E = [inv(inv(ref[k]) @ ref[k + 1]) @ (inv(est[k]) @ est[k + 1]) for k in range(len(est) - 1)]
     t = np.array([np.linalg.norm(e[:3, 3]) for e in E])
     r = np.array([angle_deg(e[:3, :3]) for e in E])
-    # ATE: rigid Umeyama alignment of the estimated positions onto the reference.
-    p, q = est[:, :3, 3], ref[:, :3, 3]
-    pm, qm = p.mean(0), q.mean(0)
-    U, _, Vt = np.linalg.svd((q - qm).T @ (p - pm))
-    S = np.diag([1, 1, np.sign(np.linalg.det(U @ Vt))])
-    R = U @ S @ Vt
-    ate = np.sqrt(np.mean(np.sum((p @ R.T + qm - R @ pm - q) ** 2, axis=1)))
     end = inv(inv(ref[0]) @ ref[-1]) @ (inv(est[0]) @ est[-1])
+    path = sum(np.linalg.norm(ref[k + 1][:3, 3] - ref[k][:3, 3]) for k in range(len(ref) - 1))
     return {
+        "lost": int(np.sum((t > LOST_M) | (r > LOST_DEG))),
+        "rpe_t_median_m": float(np.median(t)),
+        "rpe_r_median_deg": float(np.median(r)),
         "rpe_t_rmse_m": float(np.sqrt(np.mean(t**2))),
         "rpe_r_rmse_deg": float(np.sqrt(np.mean(r**2))),
-        "ate_rmse_m": float(ate),
-        "end_t_m": float(np.linalg.norm(end[:3, 3])),
-        "end_r_deg": angle_deg(end[:3, :3]),
+        "end_percent": float(100 * np.linalg.norm(end[:3, 3]) / path),
+        "end_deg": angle_deg(end[:3, :3]),
     }
 
 
-def run_ours(frames: list[np.ndarray], method: str, kinect: bool) -> tuple[np.ndarray, list[float], float]:
-    odometry = sgd_icp.Odometry(method=method, **({"max_range": 5.0} if kinect else {}))
-    times = []
-    for f in frames:
-        start = time.perf_counter()
-        odometry.register_frame(f)
-        times.append(1e3 * (time.perf_counter() - start))
-    assert not any(r.failed for r in odometry.reports), [r.message for r in odometry.reports]
-    return odometry.poses, times, odometry.voxel_size
+def kiss_reader(seq: Sequence) -> Callable[[Path], np.ndarray]:
+    """How a KISS-ICP user reads the frames: NumPy for .bin, Pillow + NumPy for depth PNGs."""
+    if not seq.kinect:
+        return lambda f: np.fromfile(f, dtype=np.float32).reshape(-1, 4)[:, :3].astype(np.float64)
+    from PIL import Image
+
+    K = np.loadtxt(seq.intrinsics)
+
+    def read(f: Path) -> np.ndarray:
+        z = np.asarray(Image.open(f), dtype=np.float64) / 1000.0
+        v, u = np.nonzero((z > 0) & (z < 65.535))
+        d = z[v, u]
+        return np.stack([(u - K[0, 2]) * d / K[0, 0], (v - K[1, 2]) * d / K[1, 1], d], axis=1)
+
+    return read
 
 
-def run_kiss(frames: list[np.ndarray], voxel_size: float | None, kinect: bool) -> tuple[np.ndarray, list[float]]:
+def run_ours(seq: Sequence, method: str) -> tuple[np.ndarray, float, float, int]:
+    start = time.perf_counter()
+    odometry = sgd_icp.Odometry(method=method)
+    for f in seq.files:
+        odometry.register_frame(
+            sgd_icp.read_depth_image(f, seq.intrinsics) if seq.kinect else sgd_icp.read_points(f)
+        )
+    wall = time.perf_counter() - start
+    return odometry.poses, wall, odometry.voxel_size, odometry.recovered_frames
+
+
+def run_kiss(seq: Sequence, voxel_size: float | None) -> tuple[np.ndarray, float]:
     from kiss_icp.config import load_config
     from kiss_icp.kiss_icp import KissICP
 
     config = load_config(None)
     config.data.deskew = False
     config.registration.max_num_threads = 1
-    if kinect:
+    if seq.kinect:
         config.data.max_range = 5.0
         config.mapping.voxel_size = 0.05
         config.adaptive_threshold.initial_threshold = 0.1
         config.adaptive_threshold.min_motion_th = 0.005
     if voxel_size is not None:
         config.mapping.voxel_size = voxel_size
+    read = kiss_reader(seq)
+    start = time.perf_counter()
     odometry = KissICP(config=config)
-    poses, times = [], []
-    for f in frames:
-        points = f.astype(np.float64)
-        start = time.perf_counter()
+    poses = []
+    for f in seq.files:
+        points = read(f)
         odometry.register_frame(points, np.zeros(len(points)))
-        times.append(1e3 * (time.perf_counter() - start))
         poses.append(odometry.last_pose.copy())
-    return np.array(poses), times
+    return np.array(poses), time.perf_counter() - start
+
+
+def print_table(rows: list[tuple[str, str, dict[str, float], float, str]]) -> None:
+    print("| sequence | run | lost | RPE median (mm / deg) | RPE RMSE (mm / deg) "
+          "| end drift (% / deg) | wall s (ms per frame) | notes |")
+    print("|---|---|---|---|---|---|---|---|")
+    for seq, name, m, wall, notes in rows:
+        print(f"| {seq} | {name} | {m['lost']} | {1e3 * m['rpe_t_median_m']:.1f} / "
+              f"{m['rpe_r_median_deg']:.3f} | {1e3 * m['rpe_t_rmse_m']:.1f} / "
+              f"{m['rpe_r_rmse_deg']:.3f} | {m['end_percent']:.2f} / {m['end_deg']:.2f} | "
+              f"{wall:.1f} ({1e3 * wall / m['frames']:.0f}) | {notes} |")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("folder", type=Path, help="KITTI sequence folder (velodyne/*.bin)")
-    parser.add_argument("--methods", default="sgd,sgd-plane,icp-plane",
-                        help="sgd-icp methods, comma-separated [default: sgd,sgd-plane,icp-plane]")
-    parser.add_argument("--max-frames", type=int, default=0)
+    parser.add_argument("folders", type=Path, nargs="+", help="sequence folders (see above)")
+    parser.add_argument("--methods", default="sgd", help="sgd-icp methods, comma-separated [default: sgd]")
+    parser.add_argument("--steps", default="1", help="frame steps, comma-separated [default: 1]")
+    parser.add_argument("--max-frames", type=int, default=0, help="frames per run [default: 0 = all]")
+    parser.add_argument("--no-kiss", action="store_true", help="sgd-icp only")
     args = parser.parse_args()
-    depth = sorted(args.folder.glob("frame-*.depth.png"))
-    kinect = bool(depth)
-    files = depth or sorted((args.folder / "velodyne").glob("*.bin"))
-    if args.max_frames:
-        files = files[: args.max_frames]
-    K = args.folder / "camera-intrinsics.txt"
-    frames = [sgd_icp.read_depth_image(f, K) if kinect else sgd_icp.read_points(f) for f in files]
-    ref, ref_name = read_reference(args.folder, len(frames))
-    print(f"{len(frames)} frames of {args.folder}; reference: {ref_name}")
-    rows, trajectories = [], {}
-    voxel = None
-    for method in args.methods.split(","):
-        poses, times, voxel = run_ours(frames, method, kinect)
-        trajectories[f"sgd-icp {method}"] = poses
-        rows.append((f"sgd-icp {method} (voxel {voxel:.2f} m)", metrics(poses, ref), times))
-    for v in (None, voxel):
-        poses, times = run_kiss(frames, v, kinect)
-        default = 0.05 if kinect else 1.0
-        name = f"KISS-ICP (voxel {default if v is None else v:.2f} m)"
-        trajectories[name] = poses
-        rows.append((name, metrics(poses, ref), times))
-    print("| run | RPE t RMSE (m) | RPE r RMSE (deg) | ATE RMSE (m) | end drift (m / deg) "
-          "| median ms per frame (frames 1..) |")
-    print("|---|---|---|---|---|---|")
-    for name, m, times in rows:
-        print(f"| {name} | {m['rpe_t_rmse_m']:.3f} | {m['rpe_r_rmse_deg']:.3f} | "
-              f"{m['ate_rmse_m']:.3f} | {m['end_t_m']:.3f} / {m['end_r_deg']:.3f} | "
-              f"{np.median(times[1:]):.1f} |")
-    names = list(trajectories)
-    kiss = next(n for n in names if n.startswith("KISS"))
-    for n in names:
-        if n.startswith("sgd-icp"):
-            d = [np.linalg.norm(a[:3, 3] - b[:3, 3]) for a, b in zip(trajectories[n], trajectories[kiss])]
-            print(f"agreement {n} vs {kiss}: largest position difference {max(d):.3f} m")
+    rows = []
+    for folder in args.folders:
+        for step in (int(s) for s in args.steps.split(",")):
+            seq = open_sequence(folder, step, args.max_frames)
+            voxel = None
+            for method in args.methods.split(","):
+                poses, wall, voxel, recovered = run_ours(seq, method)
+                m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
+                rows.append((seq.name, f"sgd-icp {method}", m, wall, f"voxel {voxel:.3f} m, {recovered} recovered"))
+            for v in [] if args.no_kiss else [None, voxel]:
+                poses, wall = run_kiss(seq, v)
+                m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
+                rows.append((seq.name, "KISS-ICP", m, wall, "its voxel rule" if v is None else f"voxel {v:.3f} m"))
+            print(f"{seq.name}: {len(seq.files)} frames done", flush=True)
+    print_table(rows)
 
 
 if __name__ == "__main__":
