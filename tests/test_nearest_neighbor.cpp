@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "nearest_support.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/index/nearest_neighbor.hpp"
 #include "test_support.hpp"
@@ -20,50 +21,11 @@ namespace {
 using sgdicp::Neighbor;
 using sgdicp::PointCloud;
 using sgdicp::ReferenceIndex;
-
-float uniform(std::mt19937_64& rng, double lo, double hi) {
-  return static_cast<float>(lo + (hi - lo) * static_cast<double>(rng() >> 11) * 0x1.0p-53);
-}
-
-PointCloud random_cloud(std::mt19937_64& rng, std::size_t n, double half_width) {
-  PointCloud c;
-  for (std::size_t i = 0; i < n; ++i) {
-    c.points.emplace_back(uniform(rng, -half_width, half_width),
-                          uniform(rng, -half_width, half_width),
-                          uniform(rng, -half_width, half_width));
-  }
-  return c;
-}
-
-// The squared distance evaluated exactly as the kd-tree does (float, x then y then z), so that
-// distances can be compared for equality.
-float squared_distance(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-  float sum = 0.0F;
-  for (int k = 0; k < 3; ++k) {
-    const float d = a[k] - b[k];
-    sum += d * d;
-  }
-  return sum;
-}
-
-struct Brute {
-  std::uint32_t index = 0;
-  float squared_distance = std::numeric_limits<float>::infinity();
-  int ties = 0;  // other points at exactly the same distance
-};
-
-Brute brute_force(const PointCloud& cloud, const Eigen::Vector3f& q) {
-  Brute best;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const float d = squared_distance(cloud.points[i], q);
-    if (d < best.squared_distance) {
-      best = {static_cast<std::uint32_t>(i), d, 0};
-    } else if (d == best.squared_distance) {
-      ++best.ties;
-    }
-  }
-  return best;
-}
+using sgdicp::test::Brute;
+using sgdicp::test::brute_force;
+using sgdicp::test::random_cloud;
+using sgdicp::test::squared_distance;
+using sgdicp::test::uniformf;
 
 class NearestNeighborTest : public ::testing::Test {
  protected:
@@ -127,7 +89,7 @@ TEST_F(NearestNeighborTest, MaxDistanceBound) {
   for (std::size_t i = 0; i < queries_.size(); ++i) {
     const Brute& b = expected_[i];
     // Bounds from well inside to well outside the true distance.
-    const float bound = b.squared_distance * uniform(rng, 0.0, 2.0) + uniform(rng, 0.0, 1e-3);
+    const float bound = b.squared_distance * uniformf(rng, 0.0, 2.0) + uniformf(rng, 0.0, 1e-3);
     const std::optional<Neighbor> n = index.nearest(queries_[i], bound);
     if (b.squared_distance > bound) {
       ASSERT_FALSE(n.has_value()) << "query " << i << ": nearest " << b.squared_distance
@@ -168,7 +130,7 @@ TEST_F(NearestNeighborTest, NearestAndBoundIsNearestWithTheRunnerUp) {
   std::size_t seconds_within = 0;
   for (std::size_t i = 0; i < queries_.size(); ++i) {
     const Brute& b = expected_[i];
-    const float bound = b.squared_distance * uniform(rng, 0.0, 3.0) + uniform(rng, 0.0, 1e-2);
+    const float bound = b.squared_distance * uniformf(rng, 0.0, 3.0) + uniformf(rng, 0.0, 1e-2);
     float others = -1.0F;
     const auto got = index.nearest_and_bound(queries_[i], bound, others);
     const auto want = index.nearest(queries_[i], bound);

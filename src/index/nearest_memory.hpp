@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "index/squared_distance.hpp"
 #include "sgdicp/index/nearest_neighbor.hpp"
 
 namespace sgdicp::detail {
@@ -65,16 +66,8 @@ class NearestMemory {
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
  private:
-  // The squared distance as nanoflann's L2_Simple_Adaptor sums it (same order, in float), so
-  // that a certified answer carries the tree's bits.
   [[nodiscard]] float squared_distance(const Eigen::Vector3f& query, std::uint32_t index) const {
-    const Eigen::Vector3f& point = reference_.cloud().points[index];
-    float sum = 0.0F;
-    for (Eigen::Index d = 0; d < 3; ++d) {
-      const float diff = query[d] - point[d];
-      sum += diff * diff;
-    }
-    return sum;
+    return tree_squared_distance(query, reference_.cloud().points[index]);
   }
 
   const ReferenceIndex& reference_;

@@ -10,6 +10,7 @@
 
 #include <nanoflann.hpp>
 
+#include "index/voxel_hash.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/threads.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
@@ -242,29 +243,46 @@ struct ReferenceIndex::Impl {
   PointCloud cloud;
   BoundingBox box;
   CloudAdaptor adaptor;
-  KdTree tree;
+  std::optional<KdTree> tree;                          // one backend or the other
   std::vector<std::unique_ptr<KdTree>> subtree_pools;  // nodes of a threaded build
+  std::optional<detail::VoxelHash> hash;
+  double hash_cell_m = 0.0;
   double voxel_size_m = 0.0;
   // The bulk box, for the registrations that scale robustly: once, on first use, from any thread.
   std::once_flag bulk_once;
   ScalingBox bulk;
 
   Impl(PointCloud reference, const KdTreeSettings& settings)
-      : cloud(std::move(reference)),
-        box(BoundingBox::of(cloud)),
-        adaptor{&cloud.points, &box},
-        tree(3, adaptor,
-             nanoflann::KDTreeSingleIndexAdaptorParams(
-                 settings.leaf_size,
-                 nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex)) {
+      : cloud(std::move(reference)), box(BoundingBox::of(cloud)), adaptor{&cloud.points, &box} {
+    tree.emplace(
+        3, adaptor,
+        nanoflann::KDTreeSingleIndexAdaptorParams(
+            settings.leaf_size, nanoflann::KDTreeSingleIndexAdaptorFlags::SkipInitialBuildIndex));
     const std::size_t threads = build_threads(settings.num_threads, cloud.size());
     if (threads == 1) {
-      tree.buildIndex();
+      tree->buildIndex();
       return;
     }
     // Two subtrees per thread even the load out: the middle splits are not median splits.
     const auto levels = static_cast<std::size_t>(std::bit_width(2 * threads - 1));
-    ThreadedBuild(tree, adaptor, settings.leaf_size).run(levels, threads, subtree_pools);
+    ThreadedBuild(*tree, adaptor, settings.leaf_size).run(levels, threads, subtree_pools);
+  }
+
+  Impl(PointCloud reference, double cell_m)
+      : cloud(std::move(reference)),
+        box(BoundingBox::of(cloud)),
+        adaptor{&cloud.points, &box},
+        hash(std::in_place, cloud, box, cell_m),
+        hash_cell_m(cell_m) {}
+
+  // Offers the candidates of `query` to a nanoflann result set, from either backend.
+  template <class Result>
+  void search(const Eigen::Vector3f& query, Result& result) const {
+    if (hash) {
+      hash->search(query, result);
+    } else {
+      tree->findNeighbors(result, query.data(), nanoflann::SearchParams());
+    }
   }
 };
 
@@ -290,6 +308,16 @@ ReferenceIndex::ReferenceIndex(PointCloud reference, const KdTreeSettings& setti
   if (settings.voxel_size_m > 0.0) checked = voxel_downsample(checked, settings.voxel_size_m);
   impl_ = std::make_unique<Impl>(std::move(checked), settings);
   impl_->voxel_size_m = settings.voxel_size_m;
+}
+
+ReferenceIndex ReferenceIndex::with_voxel_hash(PointCloud reference, double cell_m) {
+  if (!std::isfinite(cell_m) || cell_m <= 0.0) {
+    throw InvalidSettingsError("voxel hash: cell size must be positive and finite, got " +
+                               std::to_string(cell_m) + " m");
+  }
+  ReferenceIndex index;
+  index.impl_ = std::make_unique<Impl>(checked_reference(std::move(reference)), cell_m);
+  return index;
 }
 
 ReferenceIndex ReferenceIndex::on_voxel_grid(PointCloud thinned, double voxel_size_m,
@@ -332,6 +360,9 @@ const PointCloud& ReferenceIndex::cloud() const noexcept {
 double ReferenceIndex::voxel_size_m() const noexcept {
   return impl_->voxel_size_m;
 }
+double ReferenceIndex::voxel_hash_cell_m() const noexcept {
+  return impl_->hash_cell_m;
+}
 const BoundingBox& ReferenceIndex::bounding_box() const noexcept {
   return impl_->box;
 }
@@ -345,7 +376,7 @@ const ScalingBox& ReferenceIndex::bulk_bounding_box() const {
 std::optional<Neighbor> ReferenceIndex::nearest(const Eigen::Vector3f& query,
                                                 float max_squared_distance) const {
   NearestWithin result(max_squared_distance);
-  impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->search(query, result);
   if (!result.found()) return std::nullopt;
   return Neighbor{result.index(), result.worstDist()};
 }
@@ -354,7 +385,7 @@ std::optional<Neighbor> ReferenceIndex::nearest_and_bound(const Eigen::Vector3f&
                                                           float max_squared_distance,
                                                           float& others_squared_distance) const {
   TwoNearestWithin result(max_squared_distance);
-  impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->search(query, result);
   others_squared_distance = result.worstDist();
   if (!result.found()) return std::nullopt;
   return Neighbor{result.index(), result.best()};
@@ -385,7 +416,7 @@ void ReferenceIndex::k_nearest(const Eigen::Vector3f& query, std::size_t k,
   distances.resize(k);
   nanoflann::KNNResultSet<float, std::uint32_t> result(k);
   result.init(indices.data(), distances.data());
-  impl_->tree.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->search(query, result);
   for (std::size_t i = 0; i < result.size(); ++i) neighbors.push_back({indices[i], distances[i]});
 }
 

@@ -41,7 +41,9 @@ struct KdTreeSettings {
   bool operator==(const KdTreeSettings&) const = default;
 };
 
-/// A KD-tree (nanoflann) over a reference cloud it owns. Non-copyable, cheap to move.
+/// A nearest-neighbour index over a reference cloud it owns: a KD-tree (nanoflann), or a voxel
+/// hash (with_voxel_hash). Both give the same answers to every query (ties between points at the
+/// same distance aside). Non-copyable, cheap to move.
 class ReferenceIndex {
  public:
   /// Builds the tree, over the reference thinned by settings.voxel_size_m when it is set. Throws
@@ -54,6 +56,18 @@ class ReferenceIndex {
   /// voxel size that is not positive and finite.
   [[nodiscard]] static ReferenceIndex on_voxel_grid(PointCloud thinned, double voxel_size_m,
                                                     const KdTreeSettings& settings = {});
+  /// An index over `reference` as given (every point, with the normals and covariances it
+  /// carries) by a voxel hash instead of a tree: the points sorted by cubic cell of side cell_m
+  /// into one array, and a hash from a cell to its range, built in O(n) (a KD-tree's build is
+  /// O(n log n)). A query searches the cells around its own, shell by shell, until no cell left
+  /// can hold a closer point: cells about as large as the usual query distance suit it best, much
+  /// smaller ones make far queries slow (many empty cells), much larger ones scan many points.
+  /// For a reference rebuilt often and queried within a known distance, such as an odometry
+  /// map (voxel_map.hpp). voxel_size_m() is 0: the cell is for the search only, and align() uses
+  /// its source as given. Throws InvalidInputError as the constructor, and InvalidSettingsError
+  /// for a cell that is not positive and finite or is so small that the reference spans more
+  /// than 2^21 cells along an axis.
+  [[nodiscard]] static ReferenceIndex with_voxel_hash(PointCloud reference, double cell_m);
   ~ReferenceIndex();
   ReferenceIndex(ReferenceIndex&&) noexcept;
   ReferenceIndex& operator=(ReferenceIndex&&) noexcept;
@@ -67,6 +81,8 @@ class ReferenceIndex {
   [[nodiscard]] std::size_t size() const noexcept { return cloud().size(); }
   /// The voxel grid the reference was thinned with before indexing, metres (0 = none).
   [[nodiscard]] double voxel_size_m() const noexcept;
+  /// The cell of a voxel-hash index (with_voxel_hash), metres; 0 for a KD-tree.
+  [[nodiscard]] double voxel_hash_cell_m() const noexcept;
 
   /// The nearest reference point to query, if one lies within sqrt(max_squared_distance).
   /// Bounding the search prunes the tree early, so rejected queries are cheap.
@@ -96,6 +112,7 @@ class ReferenceIndex {
                  std::vector<Neighbor>& neighbors) const;
 
  private:
+  ReferenceIndex() = default;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
