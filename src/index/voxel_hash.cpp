@@ -1,6 +1,9 @@
 #include "index/voxel_hash.hpp"
 
+#include <array>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/format_number.hpp"
@@ -23,6 +26,36 @@ void check_cell_count(const BoundingBox& box, double cell_m) {
   }
 }
 
+using Key = std::array<std::int64_t, 3>;
+
+// Each item's slot among the distinct keys of the items (in first-seen order), the keys into
+// `keys`: one probe of `slots` per run of equal keys.
+template <class KeyOf>
+RecycledVector<std::uint32_t> slots_of(std::size_t items, KeyOf key_of, VoxelSlots& slots,
+                                       std::vector<Key>& keys) {
+  RecycledVector<std::uint32_t> out(items);
+  for (std::size_t i = 0; i < items; ++i) {
+    const VoxelKey key = key_of(i);
+    const std::size_t slot = slots.slot(key);
+    if (slot == keys.size()) keys.push_back({key.x, key.y, key.z});
+    out[i] = static_cast<std::uint32_t>(slot);
+  }
+  return out;
+}
+
+// A counting sort: place(position, i) for every item i, the items in the order of their groups
+// (stably); returns where each group begins in that order, and where the last ends.
+template <class Place>
+RecycledVector<std::uint32_t> counting_sort(const RecycledVector<std::uint32_t>& group_of,
+                                            std::size_t groups, Place place) {
+  RecycledVector<std::uint32_t> begins(groups + 1, 0);
+  for (const std::uint32_t g : group_of) ++begins[g + 1];
+  for (std::size_t g = 0; g < groups; ++g) begins[g + 1] += begins[g];
+  RecycledVector<std::uint32_t> next(begins.begin(), begins.end() - 1);
+  for (std::size_t i = 0; i < group_of.size(); ++i) place(next[group_of[i]]++, i);
+  return begins;
+}
+
 }  // namespace
 
 VoxelHash::VoxelHash(const PointCloud& cloud, const BoundingBox& box, double cell_m)
@@ -34,27 +67,49 @@ VoxelHash::VoxelHash(const PointCloud& cloud, const BoundingBox& box, double cel
   first_ = {first.x, first.y, first.z};
   last_ = {last.x, last.y, last.z};
 
-  // Counting sort by cell: each point's slot (cells in first-seen order) and each cell's count.
-  std::vector<std::uint32_t> point_slots(cloud.size());
-  std::vector<std::uint32_t> counts;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const VoxelKey key = grid.key(cloud.points[i]);
-    const std::size_t slot = slots_.slot(key);
-    if (slot == keys_.size()) {
-      keys_.push_back(key);
-      counts.push_back(0);
-    }
-    ++counts[slot];
-    point_slots[i] = static_cast<std::uint32_t>(slot);
-  }
-  begins_.assign(keys_.size() + 1, 0);
-  for (std::size_t s = 0; s < keys_.size(); ++s) begins_[s + 1] = begins_[s] + counts[s];
-  std::vector<std::uint32_t> next(begins_.begin(), begins_.end() - 1);
+  std::vector<Key> keys;
+  const RecycledVector<std::uint32_t> cells = slots_of(
+      cloud.size(), [&](std::size_t i) { return grid.key(cloud.points[i]); }, slots_, keys);
   entries_.resize(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    entries_[next[point_slots[i]]++] = {cloud.points[i], static_cast<std::uint32_t>(i)};
+  const auto begins = counting_sort(cells, keys.size(), [&](std::size_t at, std::size_t i) {
+    entries_[at] = {cloud.points[i], static_cast<std::uint32_t>(i)};
+  });
+  levels_.push_back({blocks_of(keys, begins), {}, cell_m});
+  build_pyramid();
+}
+
+RecycledVector<VoxelHash::Block> VoxelHash::blocks_of(const std::vector<Key>& keys,
+                                                      const RecycledVector<std::uint32_t>& begins) {
+  RecycledVector<Block> blocks(keys.size() + 1, Block{Key{}, begins.back()});
+  for (std::size_t b = 0; b < keys.size(); ++b) blocks[b] = {keys[b], begins[b]};
+  return blocks;
+}
+
+void VoxelHash::build_pyramid() {
+  while (levels_.back().blocks.size() - 1 > kTopBlocks) {
+    const RecycledVector<Block>& below = levels_.back().blocks;
+    const std::size_t count = below.size() - 1;
+    VoxelSlots slots(count / 8);
+    std::vector<Key> keys;
+    // An arithmetic shift: the floor of the quotient for negative keys too.
+    const RecycledVector<std::uint32_t> parents = slots_of(
+        count,
+        [&](std::size_t b) {
+          const Key& k = below[b].key;
+          return VoxelKey{k[0] >> kBlockShift, k[1] >> kBlockShift, k[2] >> kBlockShift};
+        },
+        slots, keys);
+    Level up;
+    up.size_m = levels_.back().size_m * (1 << kBlockShift);
+    up.members.resize(count);
+    const auto begins = counting_sort(parents, keys.size(), [&](std::size_t at, std::size_t b) {
+      up.members[at] = static_cast<std::uint32_t>(b);
+    });
+    up.blocks = blocks_of(keys, begins);
+    levels_.push_back(std::move(up));
   }
-  scan_threshold_ = keys_.size();
+  roots_.resize(levels_.back().blocks.size() - 1);
+  for (std::size_t b = 0; b < roots_.size(); ++b) roots_[b] = static_cast<std::uint32_t>(b);
 }
 
 }  // namespace sgdicp::detail
