@@ -212,7 +212,8 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   report.source_points = source.size();
 
   const double build_start = now_ms();
-  ReferenceIndex index(map_->points());
+  // A voxel hash of cells of two map voxels, not a KD-tree: built in O(n) (docs/design.md).
+  ReferenceIndex index = ReferenceIndex::with_voxel_hash(map_->points(), 2.0 * voxel_size_m_);
   prepare_reference(index, cost(), neighborhood());
   report.index_build_ms = now_ms() - build_start;
   report.map_points = index.size();
