@@ -88,6 +88,8 @@ PointCloud VoxelMap::points() const {
   const bool normals = points_ > 0 && normals_ == points_;
   const bool covariances = points_ > 0 && covariances_ == points_;
   out.points.reserve(points_);
+  if (normals) out.normals.reserve(points_);
+  if (covariances) out.covariances.reserve(points_);
   for (const auto& [key, voxel] : voxels_) {
     out.points.insert(out.points.end(), voxel.points.begin(), voxel.points.end());
     if (normals) out.normals.insert(out.normals.end(), voxel.normals.begin(), voxel.normals.end());
