@@ -1,7 +1,7 @@
 #pragma once
 // The voxel-hash backend of ReferenceIndex (private): the reference's points sorted by cubic cell
 // into one array, a hash from a cell to its range of that array, and above the cells a pyramid of
-// blocks (8^3 cells, 8^3 of those, ...) up to a level of a few blocks. The build is O(n): one key
+// blocks (2^3 cells, 2^3 of those, ...) up to a level of a few blocks. The build is O(n): one key
 // per point, one probe of a hash per run of points in one cell (the odometry map hands its points
 // voxel by voxel), counting sorts. A query visits the cells around its own shell by shell
 // (Chebyshev rings, up to kShells), skipping every cell whose box lies no closer than the worst
