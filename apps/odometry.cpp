@@ -97,7 +97,7 @@ void write_report_csv(const std::string& path, const FrameSource& source,
     std::string message = r.message;
     std::replace(message.begin(), message.end(), '"', '\'');
     out << r.index << ',' << source.frames[r.index].filename().string() << ',' << r.failed << ','
-        << r.recovered << ',' << to_string(r.start) << ',' << r.converged << ',' << r.iterations
+        << r.recovered << ',' << enum_name(r.start) << ',' << r.converged << ',' << r.iterations
         << ',' << r.source_points << ',' << r.map_points << ',' << r.overlap << ','
         << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ','
         << r.index_build_ms << ',' << r.time_ms << ",\"" << message << "\"\n";

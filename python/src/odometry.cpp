@@ -100,7 +100,7 @@ void bind_odometry(py::module_& m) {
                     "True if a retry registered the frame after the registration from the "
                     "prediction was rejected (message says why; start says which retry).")
       .def_property_readonly(
-          "start", [](const FrameReport& r) { return std::string(to_string(r.start)); },
+          "start", [](const FrameReport& r) { return std::string(enum_name(r.start)); },
           "Where the accepted registration started: 'prediction', 'last pose' or 'wide basin'.")
       .def_readonly("overlap", &FrameReport::overlap,
                     "Fraction of the registered frame's points with a map point within one map "

@@ -150,18 +150,6 @@ Eigen::Matrix4d Odometry::predicted() const {
                         : Eigen::Matrix4d(poses_.back() * last_motion_);
 }
 
-std::string_view to_string(FrameStart start) noexcept {
-  switch (start) {
-    case FrameStart::prediction:
-      return "prediction";
-    case FrameStart::last_pose:
-      return "last pose";
-    case FrameStart::wide_basin:
-      return "wide basin";
-  }
-  return "?";
-}
-
 PointCloud Odometry::map_cloud(double voxel_size_m) const {
   if (!map_ || map_->empty()) return {};
   PointCloud cloud = map_->points();
@@ -338,7 +326,7 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
       report.overlap = overlap;
       report.inlier_ratio = r.inlier_ratio;
       report.inlier_rmse_m = r.inlier_rmse_m;
-      report.message = report.recovered ? "recovered from the " + std::string(to_string(start)) +
+      report.message = report.recovered ? "recovered from the " + std::string(enum_name(start)) +
                                               " (" + rejected + ")"
                                         : r.message;
       report.T_first_frame = r.T_reference_source;
@@ -348,7 +336,7 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
         threshold_->update(rigid_inverse(T_prediction) * r.T_reference_source, range_m);
       return;
     }
-    rejected += (rejected.empty() ? "" : "; ") + std::string(to_string(start)) + ": " + why;
+    rejected += (rejected.empty() ? "" : "; ") + std::string(enum_name(start)) + ": " + why;
   }
   report.failed = true;
   report.message = "lost (" + rejected + ")";

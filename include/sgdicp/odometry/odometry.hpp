@@ -12,6 +12,7 @@
 // an overlap with the map like the frames before); one that fails is retried from the last
 // good pose and then with SGD-ICP's wide basin. A frame no start registers is lost: it gets the
 // predicted pose and touches neither the map nor the motion model. docs/odometry.md.
+#include <array>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -20,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "sgdicp/core/enum_names.hpp"
 #include "sgdicp/core/point_cloud.hpp"
 #include "sgdicp/odometry/voxel_map.hpp"
 #include "sgdicp/registration/methods.hpp"
@@ -120,7 +122,17 @@ enum class FrameStart {
   last_pose,   ///< the last registered pose, without the velocity (a retry)
   wide_basin,  ///< the last registered pose, with SGD-ICP's own wide basin (a retry)
 };
-[[nodiscard]] std::string_view to_string(FrameStart start) noexcept;
+inline constexpr std::array<EnumName<FrameStart>, 3> kFrameStartNames{{
+    {FrameStart::prediction, "prediction"},
+    {FrameStart::last_pose, "last pose"},
+    {FrameStart::wide_basin, "wide basin"},
+}};
+constexpr const auto& enum_names(FrameStart) {
+  return kFrameStartNames;
+}
+constexpr std::string_view enum_noun(FrameStart) {
+  return "frame start";
+}
 
 struct FrameReport {
   std::size_t index = 0;
