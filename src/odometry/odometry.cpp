@@ -359,10 +359,8 @@ void Odometry::add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T) {
     map_->add(transformed(frame, T));
     return;
   }
-  PointCloud points_only;
-  points_only.points = frame.points;
-  points_only.origin_m = frame.origin_m;
-  const std::vector<std::uint32_t> admitted = map_->admitted(transformed(points_only, T));
+  // The frame (voxel_downsample's output) carries no surfaces yet: moving it moves points only.
+  const std::vector<std::uint32_t> admitted = map_->admitted(transformed(frame, T));
   map_->add(transformed(subset_with_surfaces(frame, admitted, neighborhood(), covariances), T));
 }
 

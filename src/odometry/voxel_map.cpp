@@ -34,12 +34,9 @@ VoxelMap::Key VoxelMap::key_of(const Eigen::Vector3f& p) const {
 
 void VoxelMap::add(const PointCloud& cloud) {
   const bool normals = cloud.has_normals(), covariances = cloud.has_covariances();
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    if (!p.allFinite()) continue;
-    Voxel& voxel = voxels_[key_of(p)];
-    if (voxel.points.size() >= max_points_) continue;
-    voxel.points.push_back(p);
+  for (const std::uint32_t i : admitted(cloud)) {
+    Voxel& voxel = voxels_[key_of(cloud.points[i])];
+    voxel.points.push_back(cloud.points[i]);
     ++points_;
     if (normals) {
       voxel.normals.push_back(cloud.normals[i]);
@@ -52,6 +49,8 @@ void VoxelMap::add(const PointCloud& cloud) {
   }
 }
 
+// The one admission rule, which add() applies: a finite point enters while its voxel holds fewer
+// than max_points_ points, counting those of `cloud` before it.
 std::vector<std::uint32_t> VoxelMap::admitted(const PointCloud& cloud) const {
   std::vector<std::uint32_t> out;
   std::unordered_map<Key, std::size_t, KeyHash> added;  // by this cloud, per voxel
