@@ -12,6 +12,7 @@
 
 #include "index/voxel_hash.hpp"
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/core/format_number.hpp"
 #include "sgdicp/core/threads.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 
@@ -240,13 +241,13 @@ std::size_t build_threads(std::size_t requested, std::size_t points) {
 }  // namespace
 
 struct ReferenceIndex::Impl {
-  PointCloud cloud;
+  PointCloud cloud;  // the tree's (a voxel hash holds its own)
   BoundingBox box;
   CloudAdaptor adaptor;
   std::optional<KdTree> tree;                          // one backend or the other
   std::vector<std::unique_ptr<KdTree>> subtree_pools;  // nodes of a threaded build
-  std::optional<detail::VoxelHash> hash;
-  double hash_cell_m = 0.0;
+  std::optional<detail::VoxelHash> own_hash;
+  const detail::VoxelHash* hash = nullptr;  // own_hash, or one viewed (an odometry map's)
   double voxel_size_m = 0.0;
   // The bulk box, for the registrations that scale robustly: once, on first use, from any thread.
   std::once_flag bulk_once;
@@ -268,12 +269,15 @@ struct ReferenceIndex::Impl {
     ThreadedBuild(*tree, adaptor, settings.leaf_size).run(levels, threads, subtree_pools);
   }
 
-  Impl(PointCloud reference, double cell_m)
-      : cloud(std::move(reference)),
-        box(BoundingBox::of(cloud)),
-        adaptor{&cloud.points, &box},
-        hash(std::in_place, cloud, box, cell_m),
-        hash_cell_m(cell_m) {}
+  Impl(const PointCloud& reference, double cell_m) : own_hash(std::in_place, cell_m) {
+    own_hash->add(reference);
+    hash = &*own_hash;
+  }
+
+  explicit Impl(const detail::VoxelHash& viewed) : hash(&viewed) {}
+
+  [[nodiscard]] const PointCloud& points() const { return hash ? hash->cloud() : cloud; }
+  [[nodiscard]] const BoundingBox& bounds() const { return hash ? hash->box() : box; }
 
   // Offers the candidates of `query` to a nanoflann result set, from either backend.
   template <class Result>
@@ -287,6 +291,9 @@ struct ReferenceIndex::Impl {
 };
 
 namespace {
+// Cells along an axis of a reference indexed by with_voxel_hash at most.
+constexpr double kMaxVoxelHashCellsPerAxis = 0x1p21;
+
 PointCloud checked_reference(PointCloud reference) {
   if (reference.empty()) throw InvalidInputError("reference cloud is empty");
   if (reference.size() > std::numeric_limits<std::uint32_t>::max()) {
@@ -315,8 +322,25 @@ ReferenceIndex ReferenceIndex::with_voxel_hash(PointCloud reference, double cell
     throw InvalidSettingsError("voxel hash: cell size must be positive and finite, got " +
                                std::to_string(cell_m) + " m");
   }
+  const PointCloud checked = checked_reference(std::move(reference));
+  // A cell given in the wrong unit (millimetres for metres) would make a grid of billions of
+  // cells a side, and the shells' cell arithmetic stays far from overflow.
+  const BoundingBox box = BoundingBox::of(checked);
+  if (!(((box.max - box.min) / cell_m).maxCoeff() < kMaxVoxelHashCellsPerAxis)) {
+    throw InvalidSettingsError("voxel hash: cell size " + format_number(cell_m) +
+                               " m is too small for a reference " +
+                               format_number((box.max - box.min).maxCoeff()) +
+                               " m across (more than 2^21 cells along an axis)");
+  }
   ReferenceIndex index;
-  index.impl_ = std::make_unique<Impl>(checked_reference(std::move(reference)), cell_m);
+  index.impl_ = std::make_unique<Impl>(checked, cell_m);
+  return index;
+}
+
+ReferenceIndex ReferenceIndex::viewing(const detail::VoxelHash& hash) {
+  if (hash.cloud().empty()) throw InvalidInputError("reference cloud is empty");
+  ReferenceIndex index;
+  index.impl_ = std::make_unique<Impl>(hash);
   return index;
 }
 
@@ -355,21 +379,21 @@ ReferenceIndex::ReferenceIndex(ReferenceIndex&&) noexcept = default;
 ReferenceIndex& ReferenceIndex::operator=(ReferenceIndex&&) noexcept = default;
 
 const PointCloud& ReferenceIndex::cloud() const noexcept {
-  return impl_->cloud;
+  return impl_->points();
 }
 double ReferenceIndex::voxel_size_m() const noexcept {
   return impl_->voxel_size_m;
 }
 double ReferenceIndex::voxel_hash_cell_m() const noexcept {
-  return impl_->hash_cell_m;
+  return impl_->hash ? impl_->hash->cell_m() : 0.0;
 }
 const BoundingBox& ReferenceIndex::bounding_box() const noexcept {
-  return impl_->box;
+  return impl_->bounds();
 }
 
 const ScalingBox& ReferenceIndex::bulk_bounding_box() const {
   std::call_once(impl_->bulk_once,
-                 [this] { impl_->bulk = sgdicp::bulk_bounding_box(impl_->cloud); });
+                 [this] { impl_->bulk = sgdicp::bulk_bounding_box(impl_->points()); });
   return impl_->bulk;
 }
 
@@ -400,8 +424,15 @@ void ReferenceIndex::set_normals_and_covariances(std::vector<Eigen::Vector3f> no
                             std::to_string(normals.size()) + " normals and " +
                             std::to_string(covariances.size()) + " covariances were given");
   }
-  impl_->cloud.normals = std::move(normals);
-  impl_->cloud.covariances = std::move(covariances);
+  if (impl_->own_hash) {
+    impl_->own_hash->set_surfaces(std::move(normals), std::move(covariances));
+  } else if (impl_->hash) {
+    throw InvalidInputError(
+        "an index viewing a voxel map holds no surfaces of its own: add them with the points");
+  } else {
+    impl_->cloud.normals = std::move(normals);
+    impl_->cloud.covariances = std::move(covariances);
+  }
 }
 
 void ReferenceIndex::k_nearest(const Eigen::Vector3f& query, std::size_t k,

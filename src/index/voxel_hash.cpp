@@ -1,9 +1,8 @@
 #include "index/voxel_hash.hpp"
 
-#include <array>
+#include <numeric>
 #include <string>
 #include <utility>
-#include <vector>
 
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/format_number.hpp"
@@ -11,105 +10,219 @@
 namespace sgdicp::detail {
 namespace {
 
-float largest_coordinate_of(const BoundingBox& box) {
-  return static_cast<float>(std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()));
-}
-
-// Refuses a cell so small that the box spans more than kMaxCellsPerAxis of them along an axis.
-void check_cell_count(const BoundingBox& box, double cell_m) {
-  const double cells = ((box.max - box.min) / cell_m).maxCoeff();
-  if (!(cells < VoxelHash::kMaxCellsPerAxis)) {
-    throw InvalidSettingsError("voxel hash: cell size " + format_number(cell_m) +
-                               " m is too small for a reference " +
-                               format_number((box.max - box.min).maxCoeff()) +
-                               " m across (more than 2^21 cells along an axis)");
+// The largest absolute coordinate of the finite points (which alone enter), 0 for none.
+float largest_coordinate_of(const PointCloud& cloud) {
+  float largest = 0.0F;
+  for (const Eigen::Vector3f& p : cloud.points) {
+    if (p.allFinite()) largest = std::max(largest, p.cwiseAbs().maxCoeff());
   }
-}
-
-using Key = std::array<std::int64_t, 3>;
-
-// Each item's slot among the distinct keys of the items (in first-seen order), the keys into
-// `keys`: one probe of `slots` per run of equal keys.
-template <class KeyOf>
-RecycledVector<std::uint32_t> slots_of(std::size_t items, KeyOf key_of, VoxelSlots& slots,
-                                       std::vector<Key>& keys) {
-  RecycledVector<std::uint32_t> out(items);
-  for (std::size_t i = 0; i < items; ++i) {
-    const VoxelKey key = key_of(i);
-    const std::size_t slot = slots.slot(key);
-    if (slot == keys.size()) keys.push_back({key.x, key.y, key.z});
-    out[i] = static_cast<std::uint32_t>(slot);
-  }
-  return out;
-}
-
-// A counting sort: place(position, i) for every item i, the items in the order of their groups
-// (stably); returns where each group begins in that order, and where the last ends.
-template <class Place>
-RecycledVector<std::uint32_t> counting_sort(const RecycledVector<std::uint32_t>& group_of,
-                                            std::size_t groups, Place place) {
-  RecycledVector<std::uint32_t> begins(groups + 1, 0);
-  for (const std::uint32_t g : group_of) ++begins[g + 1];
-  for (std::size_t g = 0; g < groups; ++g) begins[g + 1] += begins[g];
-  RecycledVector<std::uint32_t> next(begins.begin(), begins.end() - 1);
-  for (std::size_t i = 0; i < group_of.size(); ++i) place(next[group_of[i]]++, i);
-  return begins;
+  return largest;
 }
 
 }  // namespace
 
-VoxelHash::VoxelHash(const PointCloud& cloud, const BoundingBox& box, double cell_m)
-    : cell_m_(cell_m), inverse_cell_(1.0 / cell_m), slots_(cloud.size() / 4) {
-  const VoxelGrid grid(cell_m, largest_coordinate_of(box));  // checks the cell size
-  check_cell_count(box, cell_m);
-  const VoxelKey first = grid.key(box.min.cast<float>());
-  const VoxelKey last = grid.key(box.max.cast<float>());
-  first_ = {first.x, first.y, first.z};
-  last_ = {last.x, last.y, last.z};
-
-  std::vector<Key> keys;
-  const RecycledVector<std::uint32_t> cells = slots_of(
-      cloud.size(), [&](std::size_t i) { return grid.key(cloud.points[i]); }, slots_, keys);
-  entries_.resize(cloud.size());
-  const auto begins = counting_sort(cells, keys.size(), [&](std::size_t at, std::size_t i) {
-    entries_[at] = {cloud.points[i], static_cast<std::uint32_t>(i)};
-  });
-  levels_.push_back({blocks_of(keys, begins), {}, cell_m});
-  build_pyramid();
-}
-
-RecycledVector<VoxelHash::Block> VoxelHash::blocks_of(const std::vector<Key>& keys,
-                                                      const RecycledVector<std::uint32_t>& begins) {
-  RecycledVector<Block> blocks(keys.size() + 1, Block{Key{}, begins.back()});
-  for (std::size_t b = 0; b < keys.size(); ++b) blocks[b] = {keys[b], begins[b]};
-  return blocks;
-}
-
-void VoxelHash::build_pyramid() {
-  while (levels_.back().blocks.size() - 1 > kTopBlocks) {
-    const RecycledVector<Block>& below = levels_.back().blocks;
-    const std::size_t count = below.size() - 1;
-    VoxelSlots slots(count / 8);
-    std::vector<Key> keys;
-    // An arithmetic shift: the floor of the quotient for negative keys too.
-    const RecycledVector<std::uint32_t> parents = slots_of(
-        count,
-        [&](std::size_t b) {
-          const Key& k = below[b].key;
-          return VoxelKey{k[0] >> kBlockShift, k[1] >> kBlockShift, k[2] >> kBlockShift};
-        },
-        slots, keys);
-    Level up;
-    up.size_m = levels_.back().size_m * (1 << kBlockShift);
-    up.members.resize(count);
-    const auto begins = counting_sort(parents, keys.size(), [&](std::size_t at, std::size_t b) {
-      up.members[at] = static_cast<std::uint32_t>(b);
-    });
-    up.blocks = blocks_of(keys, begins);
-    levels_.push_back(std::move(up));
+VoxelHash::VoxelHash(double cell_m, std::size_t max_points_per_voxel)
+    : cell_m_(cell_m), inverse_cell_(1.0 / cell_m), max_points_(max_points_per_voxel) {
+  if (!std::isfinite(cell_m) || cell_m <= 0.0) {
+    throw InvalidSettingsError("voxel hash: cell size must be positive and finite, got " +
+                               format_number(cell_m) + " m");
   }
-  roots_.resize(levels_.back().blocks.size() - 1);
-  for (std::size_t b = 0; b < roots_.size(); ++b) roots_[b] = static_cast<std::uint32_t>(b);
+  if (max_points_per_voxel == 0) {
+    throw InvalidSettingsError("voxel hash: at least one point per voxel");
+  }
+}
+
+std::vector<std::uint32_t> VoxelHash::admitted(const PointCloud& cloud) const {
+  std::vector<std::uint32_t> out;
+  out.reserve(cloud.size());
+  const VoxelGrid grid(0.5 * cell_m_, largest_coordinate_of(cloud));
+  KeySlots mine;  // the voxels this cloud fills, and how far (in `added`)
+  std::vector<std::uint32_t> added;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    if (!p.allFinite()) continue;
+    if (max_points_ != kUnbounded) {
+      const VoxelKey voxel = grid.key(p);
+      const std::uint32_t cell = cell_slots_.find(parent(voxel));
+      const std::size_t held = cell == KeySlots::kNone ? 0 : cells_[cell].counts[octant(voxel)];
+      std::uint32_t at = mine.find(voxel);
+      if (at == KeySlots::kNone) {
+        at = static_cast<std::uint32_t>(added.size());
+        mine.insert(voxel, at);
+        added.push_back(0);
+      }
+      if (held + added[at] >= max_points_) continue;
+      ++added[at];
+    }
+    out.push_back(static_cast<std::uint32_t>(i));
+  }
+  return out;
+}
+
+void VoxelHash::add(const PointCloud& cloud) {
+  const std::vector<std::uint32_t> in = admitted(cloud);
+  if (cloud_.size() + in.size() > std::numeric_limits<std::uint32_t>::max()) {
+    throw InvalidInputError("voxel hash: more than 2^32-1 points");
+  }
+  if (cloud_.empty()) {
+    normals_ = cloud.has_normals();
+    covariances_ = cloud.has_covariances();
+  }
+  // A cloud without them ends them for the whole hash: a cost reads all or none.
+  if (normals_ && !cloud.has_normals()) normals_ = false, cloud_.normals.clear();
+  if (covariances_ && !cloud.has_covariances()) covariances_ = false, cloud_.covariances.clear();
+  const VoxelGrid grid(0.5 * cell_m_, largest_coordinate_of(cloud));
+  for (const std::uint32_t i : in) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    const VoxelKey voxel = grid.key(p);
+    std::uint32_t slot = cell_slots_.find(parent(voxel));
+    if (slot == KeySlots::kNone) slot = add_cell(parent(voxel));
+    Cell& cell = cells_[slot];
+    const auto index = static_cast<std::uint32_t>(cloud_.size());
+    owners_.push_back({slot, static_cast<std::uint32_t>(cell.entries.size())});
+    cell.entries.push_back({p, index});
+    if (cell.counts[octant(voxel)]++ == 0) ++voxels_;
+    cell.min = cell.min.cwiseMin(p);
+    cell.max = cell.max.cwiseMax(p);
+    cloud_.points.push_back(p);
+    if (normals_) cloud_.normals.push_back(cloud.normals[i]);
+    if (covariances_) cloud_.covariances.push_back(cloud.covariances[i]);
+  }
+  refresh();
+}
+
+void VoxelHash::remove_far_from(const Eigen::Vector3d& centre_m, double radius_m) {
+  const double r2 = radius_m * radius_m;
+  bool removed = false;
+  for (std::uint32_t slot = 0; slot < cells_.size();) {
+    const Eigen::Vector3f& first = cells_[slot].entries.front().point;
+    if ((first.cast<double>() - centre_m).squaredNorm() > r2) {
+      remove_cell(slot);  // the last cell moves into this slot: look at it next
+      removed = true;
+    } else {
+      ++slot;
+    }
+  }
+  if (removed) refresh();
+}
+
+void VoxelHash::set_surfaces(std::vector<Eigen::Vector3f> normals,
+                             std::vector<Eigen::Matrix3f> covariances) {
+  cloud_.normals = std::move(normals);
+  cloud_.covariances = std::move(covariances);
+  normals_ = cloud_.has_normals();
+  covariances_ = cloud_.has_covariances();
+}
+
+void VoxelHash::clear() {
+  *this = VoxelHash(cell_m_, max_points_);
+}
+
+std::uint32_t VoxelHash::add_cell(const VoxelKey& key) {
+  const auto slot = static_cast<std::uint32_t>(cells_.size());
+  cells_.emplace_back();
+  cell_keys_.push_back(key);
+  cell_slots_.insert(key, slot);
+  mark_above(0, key);
+  grow_pyramid();
+  return slot;
+}
+
+void VoxelHash::remove_cell(std::uint32_t slot) {
+  const VoxelKey key = cell_keys_[slot];
+  unmark_above(0, key);
+  // Read each entry's index afresh: a point moved into a gap may be one of this cell's.
+  const std::vector<Entry>& entries = cells_[slot].entries;
+  for (std::size_t e = 0; e < entries.size(); ++e) drop_point(entries[e].index);
+  for (const std::uint32_t count : cells_[slot].counts) voxels_ -= count > 0 ? 1 : 0;
+  const auto last = static_cast<std::uint32_t>(cells_.size() - 1);
+  if (slot != last) {
+    cells_[slot] = std::move(cells_[last]);
+    cell_keys_[slot] = cell_keys_[last];
+    cell_slots_.reassign(cell_keys_[slot], slot);
+    for (const Entry& e : cells_[slot].entries) owners_[e.index].cell = slot;
+  }
+  cell_slots_.erase(key);
+  cells_.pop_back();
+  cell_keys_.pop_back();
+}
+
+// Drops point `index` of cloud_: the last point takes its place, and its cell's entry learns so.
+void VoxelHash::drop_point(std::uint32_t index) {
+  const std::size_t last = cloud_.size() - 1;
+  if (index != last) {
+    cloud_.points[index] = cloud_.points[last];
+    if (normals_) cloud_.normals[index] = cloud_.normals[last];
+    if (covariances_) cloud_.covariances[index] = cloud_.covariances[last];
+    owners_[index] = owners_[last];
+    cells_[owners_[index].cell].entries[owners_[index].at].index = index;
+  }
+  cloud_.points.pop_back();
+  if (normals_) cloud_.normals.pop_back();
+  if (covariances_) cloud_.covariances.pop_back();
+  owners_.pop_back();
+}
+
+void VoxelHash::mark_above(std::size_t level, VoxelKey key) {
+  for (; level < levels_.size(); ++level) {
+    Level& up = levels_[level];
+    const VoxelKey block = parent(key);
+    const std::uint32_t slot = up.slots.find(block);
+    const auto bit = static_cast<std::uint8_t>(1U << octant(key));
+    if (slot != KeySlots::kNone) {
+      up.children[slot] |= bit;
+      return;
+    }
+    up.slots.insert(block, static_cast<std::uint32_t>(up.keys.size()));
+    up.keys.push_back(block);
+    up.children.push_back(bit);
+    key = block;
+  }
+}
+
+void VoxelHash::unmark_above(std::size_t level, VoxelKey key) {
+  for (; level < levels_.size(); ++level) {
+    Level& up = levels_[level];
+    const VoxelKey block = parent(key);
+    const std::uint32_t slot = up.slots.find(block);
+    up.children[slot] &= static_cast<std::uint8_t>(~(1U << octant(key)));
+    if (up.children[slot] != 0) return;
+    const auto last = static_cast<std::uint32_t>(up.keys.size() - 1);
+    if (slot != last) {
+      up.keys[slot] = up.keys[last];
+      up.children[slot] = up.children[last];
+      up.slots.reassign(up.keys[slot], slot);
+    }
+    up.slots.erase(block);
+    up.keys.pop_back();
+    up.children.pop_back();
+    key = block;
+  }
+}
+
+// A level above the top while the top holds more than kTopBlocks blocks (levels are never taken
+// away: a map that shrank keeps a pyramid a little taller than it needs).
+void VoxelHash::grow_pyramid() {
+  while (keys_at(levels_.size()).size() > kTopBlocks) {
+    levels_.emplace_back();
+    const std::vector<VoxelKey> top = keys_at(levels_.size() - 1);
+    for (const VoxelKey& key : top) mark_above(levels_.size() - 1, key);
+  }
+}
+
+void VoxelHash::refresh() {
+  box_ = BoundingBox{};
+  first_.fill(std::numeric_limits<std::int64_t>::max());
+  last_.fill(std::numeric_limits<std::int64_t>::min());
+  for (std::size_t c = 0; c < cells_.size(); ++c) {
+    box_.extend(cells_[c].min.cast<double>());
+    box_.extend(cells_[c].max.cast<double>());
+    const VoxelKey& k = cell_keys_[c];
+    first_ = {std::min(first_[0], k.x), std::min(first_[1], k.y), std::min(first_[2], k.z)};
+    last_ = {std::max(last_[0], k.x), std::max(last_[1], k.y), std::max(last_[2], k.z)};
+  }
+  roots_.resize(keys_at(levels_.size()).size());
+  std::iota(roots_.begin(), roots_.end(), 0U);
 }
 
 }  // namespace sgdicp::detail

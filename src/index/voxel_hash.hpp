@@ -1,15 +1,18 @@
 #pragma once
-// The voxel-hash backend of ReferenceIndex (private): the reference's points sorted by cubic cell
-// into one array, a hash from a cell to its range of that array, and above the cells a pyramid of
-// blocks (2^3 cells, 2^3 of those, ...) up to a level of a few blocks. The build is O(n): one key
-// per point, one probe of a hash per run of points in one cell (the odometry map hands its points
-// voxel by voxel), counting sorts. A query visits the cells around its own shell by shell
-// (Chebyshev rings, up to kShells), skipping every cell whose box lies no closer than the worst
-// distance its result set still accepts, and stops once nothing outside can be closer. A query
-// whose answer lies farther (new ground, a sensor moved by metres) would need shells of many
-// empty cells: it goes down the pyramid instead, nearest block first, pruned as the cells are.
-// The result sets are the KD-tree's (nanoflann's interface) and the distances the same float
-// arithmetic, so the answers are the tree's, ties aside.
+// The voxel-hash backend of ReferenceIndex and the odometry map's storage (private): points kept
+// by cubic cell (a hash from a cell to its points), and above the cells a pyramid of blocks
+// (2^3 cells, 2^3 of those, ...) up to a level of a few blocks. It grows and shrinks in place:
+// adding a point costs one probe of the hash (and a few more when its cell is new), dropping a
+// cell moves the last points of the flat cloud into its gaps, so a map that gains a frame and
+// loses its far cells is never rebuilt. A cell is 2x2x2 voxels, each admitting at most a bound of
+// points (the odometry map's rule; unbounded for a reference indexed as given).
+// A query visits the cells around its own shell by shell (Chebyshev rings, up to kShells),
+// skipping every cell whose box lies no closer than the worst distance its result set still
+// accepts, and stops once nothing outside can be closer. A query whose answer lies farther (new
+// ground, a sensor moved by metres) would need shells of many empty cells: it goes down the
+// pyramid instead, nearest block first, pruned as the cells are. The result sets are the
+// KD-tree's (nanoflann's interface) and the distances the same float arithmetic, so the answers
+// are the tree's, ties aside.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -21,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "index/key_slots.hpp"
 #include "index/squared_distance.hpp"
 #include "points/voxel_table.hpp"
 #include "sgdicp/core/point_cloud.hpp"
@@ -29,16 +33,42 @@ namespace sgdicp::detail {
 
 class VoxelHash {
  public:
-  /// Indexes `cloud` (finite points, box its bounding box). Throws InvalidSettingsError for a
-  /// cell that is not positive and finite, or so small that the box spans more than
-  /// kMaxCellsPerAxis cells along an axis.
-  VoxelHash(const PointCloud& cloud, const BoundingBox& box, double cell_m);
+  static constexpr std::size_t kUnbounded = std::numeric_limits<std::size_t>::max();
+
+  /// An empty hash of cubic cells of side cell_m, each of 2x2x2 voxels admitting at most
+  /// max_points_per_voxel points. Throws InvalidSettingsError for a cell that is not positive and
+  /// finite or a bound of 0.
+  explicit VoxelHash(double cell_m, std::size_t max_points_per_voxel = kUnbounded);
+
+  /// The indices of the points of `cloud` that add(cloud) keeps, in order: a finite point enters
+  /// while its voxel holds fewer than the bound, counting those of `cloud` before it.
+  [[nodiscard]] std::vector<std::uint32_t> admitted(const PointCloud& cloud) const;
+  /// Adds the admitted points of `cloud` at the end of cloud(), with their normals (covariances)
+  /// while every point added since the hash was last empty came with one. Throws
+  /// InvalidSettingsError for a coordinate too large for the cell size, InvalidInputError beyond
+  /// 2^32 - 1 points.
+  void add(const PointCloud& cloud);
+  /// Drops every cell whose first point lies farther than radius_m from centre_m; the last
+  /// points of cloud() move into the gaps.
+  void remove_far_from(const Eigen::Vector3d& centre_m, double radius_m);
+  /// Stores normals and covariances for cloud() (one per point each, or empty).
+  void set_surfaces(std::vector<Eigen::Vector3f> normals, std::vector<Eigen::Matrix3f> covariances);
+  void clear();
+
+  /// Every point held, in no particular order (an index into it is what a search returns).
+  [[nodiscard]] const PointCloud& cloud() const noexcept { return cloud_; }
+  /// The box of cloud()'s points.
+  [[nodiscard]] const BoundingBox& box() const noexcept { return box_; }
+  /// Occupied voxels (a cell holds up to 8).
+  [[nodiscard]] std::size_t voxels() const noexcept { return voxels_; }
+  [[nodiscard]] double cell_m() const noexcept { return cell_m_; }
+  [[nodiscard]] std::size_t max_points_per_voxel() const noexcept { return max_points_; }
 
   /// Offers every point that can be closer than result.worstDist() to result.addPoint(squared
   /// distance, index), as nanoflann's findNeighbors does with its result sets.
   template <class Result>
   void search(const Eigen::Vector3f& query, Result& result) const {
-    if (!query.allFinite()) return;  // the tree finds nothing for it either
+    if (!query.allFinite() || cells_.empty()) return;  // the tree finds nothing for it either
     const Eigen::Vector3d q = query.cast<double>();
     Key centre;
     for (std::size_t d = 0; d < 3; ++d) {
@@ -54,57 +84,51 @@ class VoxelHash {
       }
       // Shells grow as r^2: past a few, the pyramid finds the far points for less.
       const auto side = static_cast<std::size_t>(2 * r + 1);
-      if (r > kShells || side * side * side > cells().size()) {
-        const std::size_t top = levels_.size() - 1;
-        return visit_blocks(top, roots_.data(), roots_.data() + roots_.size(), query,
-                            Visited{centre, r - 1}, result);
+      if (r > kShells || side * side * side > cells_.size()) {
+        return visit_blocks(levels_.size(), roots_, query, Visited{centre, r - 1}, result);
       }
       visit_shell(query, centre, r, result);
     }
   }
 
-  /// Cells along an axis of the box at most (a larger count is a cell size given in the wrong
-  /// unit, and the shells' cell arithmetic stays far from overflow).
-  static constexpr double kMaxCellsPerAxis = 0x1p21;
   /// Shells visited cell by cell before the search goes down the pyramid.
   static constexpr std::int64_t kShells = 2;
-  /// A block is 2^kBlockShift blocks of the level below a side (a cell's block: a shift of its
-  /// key).
-  static constexpr int kBlockShift = 1;
-  /// The pyramid stops at a level of at most this many blocks.
+  /// The pyramid grows a level once its top holds more than this many blocks.
   static constexpr std::size_t kTopBlocks = 64;
 
  private:
   using Key = std::array<std::int64_t, 3>;
   struct Entry {
     Eigen::Vector3f point;
-    std::uint32_t index;  // into the reference cloud
+    std::uint32_t index;  // into cloud_
   };
-  // A cell (level 0) or a block: its key at its level, and where its members begin (level 0: in
-  // entries_; above: in Level::members). Each level ends with a sentinel that ends the last.
-  struct Block {
-    Key key;
-    std::uint32_t begin;
+  struct Cell {
+    std::vector<Entry> entries;
+    std::array<std::uint32_t, 8> counts{};  // points per voxel of the cell (by octant)
+    Eigen::Vector3f min{Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity())};
+    Eigen::Vector3f max{Eigen::Vector3f::Constant(-std::numeric_limits<float>::infinity())};
   };
+  // Where a point of cloud_ is listed: cells_[cell].entries[at].
+  struct Owner {
+    std::uint32_t cell;
+    std::uint32_t at;
+  };
+  // A level of blocks above the cells (level l >= 1: blocks of 2^l cells a side), dense by slot;
+  // a block's children are the occupied octants of the level below, a bit each.
   struct Level {
-    RecycledVector<Block> blocks;
-    RecycledVector<std::uint32_t> members;  // the blocks of the level below, by block (level > 0)
-    double size_m = 0.0;                    // a block's side
+    KeySlots slots;
+    std::vector<VoxelKey> keys;
+    std::vector<std::uint8_t> children;
   };
   // The cells the shells visited: within Chebyshev radius r of centre.
   struct Visited {
     Key centre;
     std::int64_t r;
-    [[nodiscard]] bool holds(const Key& key) const {
-      return std::abs(key[0] - centre[0]) <= r && std::abs(key[1] - centre[1]) <= r &&
-             std::abs(key[2] - centre[2]) <= r;
+    [[nodiscard]] bool holds(const VoxelKey& key) const {
+      return std::abs(key.x - centre[0]) <= r && std::abs(key.y - centre[1]) <= r &&
+             std::abs(key.z - centre[2]) <= r;
     }
   };
-
-  // The cells by slot, with the end sentinel.
-  [[nodiscard]] std::span<const Block> cells() const {
-    return {levels_.front().blocks.data(), levels_.front().blocks.size() - 1};
-  }
 
   // Whether a cell (or block) whose squared gap to the query is gap_sq can hold no point the
   // result set accepts. The gap is shrunk by a relative 1e-5, far above the float rounding of a
@@ -120,10 +144,10 @@ class VoxelHash {
     const double low = static_cast<double>(i) * size_m;
     return std::max({0.0, low - q, q - (low + size_m)});
   }
-  [[nodiscard]] static double gap_sq(const Key& key, const Eigen::Vector3d& q, double size_m) {
-    const double x = gap(key[0], q.x(), size_m);
-    const double y = gap(key[1], q.y(), size_m);
-    const double z = gap(key[2], q.z(), size_m);
+  [[nodiscard]] static double gap_sq(const VoxelKey& key, const Eigen::Vector3d& q, double size_m) {
+    const double x = gap(key.x, q.x(), size_m);
+    const double y = gap(key.y, q.y(), size_m);
+    const double z = gap(key.z, q.z(), size_m);
     return x * x + y * y + z * z;
   }
 
@@ -164,74 +188,103 @@ class VoxelHash {
         for (std::int64_t x = centre[0] - r; x <= centre[0] + r; x += step) {
           if (x < first_[0] || x > last_[0]) continue;
           const double gx = gap(x, q.x(), cell_m_);
-          if (!beyond(gzy + gx * gx, result.worstDist())) visit_cell({x, y, z}, query, result);
+          if (beyond(gzy + gx * gx, result.worstDist())) continue;
+          const std::uint32_t slot = cell_slots_.find(VoxelKey{x, y, z});
+          if (slot != KeySlots::kNone) visit_cell(slot, query, result);
         }
       }
     }
   }
 
-  // The blocks `members` of a level other than the cells the shells visited: the one nearest the
-  // query first, then every other not beyond the result's worst; for a block, its members below.
+  // Level 0: the cells; level l > 0: levels_[l - 1].
+  [[nodiscard]] const std::vector<VoxelKey>& keys_at(std::size_t level) const {
+    return level == 0 ? cell_keys_ : levels_[level - 1].keys;
+  }
+  [[nodiscard]] const KeySlots& slots_at(std::size_t level) const {
+    return level == 0 ? cell_slots_ : levels_[level - 1].slots;
+  }
+
+  // The blocks `slots` of a level other than the cells the shells visited: the one nearest the
+  // query first, then every other not beyond the result's worst; for a block, its children.
   template <class Result>
-  void visit_blocks(std::size_t level, const std::uint32_t* first, const std::uint32_t* last,
+  void visit_blocks(std::size_t level, std::span<const std::uint32_t> slots,
                     const Eigen::Vector3f& query, const Visited& visited, Result& result) const {
     const Eigen::Vector3d q = query.cast<double>();
-    const Level& at = levels_[level];
+    const std::vector<VoxelKey>& keys = keys_at(level);
+    const double size_m = std::ldexp(cell_m_, static_cast<int>(level));
     const auto visit = [&](std::uint32_t b) {
       if (level == 0) {
-        if (!visited.holds(at.blocks[b].key)) visit_slot(b, query, result);
-      } else {
-        const std::uint32_t* members = at.members.data();
-        visit_blocks(level - 1, members + at.blocks[b].begin, members + at.blocks[b + 1].begin,
-                     query, visited, result);
+        if (!visited.holds(keys[b])) visit_cell(b, query, result);
+        return;
       }
+      std::array<std::uint32_t, 8> children{};
+      std::size_t count = 0;
+      const std::uint8_t bits = levels_[level - 1].children[b];
+      for (unsigned o = 0; o < 8; ++o) {
+        if ((bits >> o & 1U) != 0) children[count++] = slots_at(level - 1).find(child(keys[b], o));
+      }
+      visit_blocks(level - 1, std::span(children.data(), count), query, visited, result);
     };
-    const std::uint32_t* nearest = last;
+    std::size_t nearest = slots.size();
     double least = std::numeric_limits<double>::infinity();
-    for (const std::uint32_t* b = first; b != last; ++b) {
-      const double g = gap_sq(at.blocks[*b].key, q, at.size_m);
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      const double g = gap_sq(keys[slots[i]], q, size_m);
       if (g < least) {
         least = g;
-        nearest = b;
+        nearest = i;
       }
     }
-    if (nearest == last || beyond(least, result.worstDist())) return;
-    visit(*nearest);
-    for (const std::uint32_t* b = first; b != last; ++b) {
-      if (b != nearest && !beyond(gap_sq(at.blocks[*b].key, q, at.size_m), result.worstDist())) {
-        visit(*b);
+    if (nearest == slots.size() || beyond(least, result.worstDist())) return;
+    visit(slots[nearest]);
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      if (i != nearest && !beyond(gap_sq(keys[slots[i]], q, size_m), result.worstDist())) {
+        visit(slots[i]);
       }
     }
   }
 
   template <class Result>
-  void visit_cell(const Key& key, const Eigen::Vector3f& query, Result& result) const {
-    const std::size_t slot = slots_.find(VoxelKey{key[0], key[1], key[2]});
-    if (slot != VoxelSlots::kNone) visit_slot(slot, query, result);
-  }
-
-  template <class Result>
-  void visit_slot(std::size_t slot, const Eigen::Vector3f& query, Result& result) const {
-    const RecycledVector<Block>& cells = levels_.front().blocks;
-    for (std::uint32_t e = cells[slot].begin; e < cells[slot + 1].begin; ++e) {
-      const float d = tree_squared_distance(query, entries_[e].point);
-      if (d < result.worstDist()) result.addPoint(d, entries_[e].index);
+  void visit_cell(std::uint32_t slot, const Eigen::Vector3f& query, Result& result) const {
+    for (const Entry& e : cells_[slot].entries) {
+      const float d = tree_squared_distance(query, e.point);
+      if (d < result.worstDist()) result.addPoint(d, e.index);
     }
   }
 
-  // The blocks of `keys` whose members begin at `begins` (which ends with the end of the last).
-  static RecycledVector<Block> blocks_of(const std::vector<Key>& keys,
-                                         const RecycledVector<std::uint32_t>& begins);
-  // The levels above the cells, up to one of at most kTopBlocks blocks.
-  void build_pyramid();
+  // A key's block one level up (an arithmetic shift: the floor of the quotient for negative keys
+  // too), its octant in that block, and the key of a block's octant one level down.
+  [[nodiscard]] static VoxelKey parent(const VoxelKey& k) { return {k.x >> 1, k.y >> 1, k.z >> 1}; }
+  [[nodiscard]] static unsigned octant(const VoxelKey& k) {
+    return static_cast<unsigned>((k.x & 1) | (k.y & 1) << 1 | (k.z & 1) << 2);
+  }
+  [[nodiscard]] static VoxelKey child(const VoxelKey& k, unsigned o) {
+    return {k.x * 2 + (o & 1U), k.y * 2 + (o >> 1 & 1U), k.z * 2 + (o >> 2 & 1U)};
+  }
+
+  std::uint32_t add_cell(const VoxelKey& key);
+  void remove_cell(std::uint32_t slot);
+  void drop_point(std::uint32_t index);
+  // Marks `key` (of level `level`) occupied in the levels above; unmark: no longer occupied.
+  void mark_above(std::size_t level, VoxelKey key);
+  void unmark_above(std::size_t level, VoxelKey key);
+  void grow_pyramid();
+  // The box, the grid's corner cells and the pyramid's roots, after points came or went.
+  void refresh();
 
   double cell_m_;
   double inverse_cell_;
-  Key first_{}, last_{};              // the cells of the box's corners
-  VoxelSlots slots_;                  // a cell's key -> its slot
-  RecycledVector<Entry> entries_;     // by cell (the arrays of a map rebuilt every frame are kept)
-  std::vector<Level> levels_;         // the cells, then the blocks, coarser and coarser
-  std::vector<std::uint32_t> roots_;  // every block of the top level
+  std::size_t max_points_;
+  KeySlots cell_slots_;               // a cell's key -> its slot
+  std::vector<VoxelKey> cell_keys_;   // by slot
+  std::vector<Cell> cells_;           // by slot
+  std::vector<Level> levels_;         // the blocks above the cells, coarser and coarser
+  std::vector<std::uint32_t> roots_;  // every slot of the top level
+  PointCloud cloud_;
+  std::vector<Owner> owners_;                   // by point of cloud_
+  bool normals_ = false, covariances_ = false;  // kept for every point of cloud_
+  BoundingBox box_;
+  Key first_{}, last_{};  // the least and greatest cell keys, by axis
+  std::size_t voxels_ = 0;
 };
 
 }  // namespace sgdicp::detail

@@ -152,7 +152,7 @@ Eigen::Matrix4d Odometry::predicted() const {
 
 PointCloud Odometry::map_cloud(double voxel_size_m) const {
   if (!map_ || map_->empty()) return {};
-  PointCloud cloud = map_->points();
+  const PointCloud& cloud = map_->points();
   return voxel_size_m > 0.0 ? voxel_downsample(cloud, voxel_size_m) : cloud;
 }
 
@@ -200,9 +200,9 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   report.source_points = source.size();
 
   const double build_start = now_ms();
-  // A voxel hash of cells of two map voxels, not a KD-tree: built in O(n) (docs/design.md).
-  ReferenceIndex index = ReferenceIndex::with_voxel_hash(map_->points(), 2.0 * voxel_size_m_);
-  prepare_reference(index, cost(), neighborhood());
+  // The map is its own index, with its surfaces: nothing is copied or built (docs/design.md).
+  const ReferenceIndex index = map_->index();
+  check_reference_prepared(index, cost());
   report.index_build_ms = now_ms() - build_start;
   report.map_points = index.size();
 

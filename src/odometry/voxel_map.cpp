@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "index/voxel_hash.hpp"
 #include "sgdicp/core/error.hpp"
 
 namespace sgdicp {
@@ -16,93 +17,52 @@ VoxelMap::VoxelMap(double voxel_size_m, std::size_t max_points_per_voxel)
   if (max_points_per_voxel == 0) {
     throw InvalidSettingsError("voxel map: at least one point per voxel");
   }
+  // Cells of two voxels a side: measured fastest for the map's queries (docs/design.md).
+  hash_ = std::make_unique<detail::VoxelHash>(2.0 * voxel_size_m, max_points_per_voxel);
 }
 
-std::size_t VoxelMap::KeyHash::operator()(const Key& k) const noexcept {
-  // The spatial hash of Teschner et al. 2003: three large primes, xor-ed.
-  return static_cast<std::size_t>((static_cast<std::uint64_t>(k.x) * 73856093U) ^
-                                  (static_cast<std::uint64_t>(k.y) * 19349669U) ^
-                                  (static_cast<std::uint64_t>(k.z) * 83492791U));
+VoxelMap::~VoxelMap() = default;
+VoxelMap::VoxelMap(const VoxelMap& other)
+    : voxel_size_m_(other.voxel_size_m_),
+      max_points_(other.max_points_),
+      hash_(std::make_unique<detail::VoxelHash>(*other.hash_)) {}
+VoxelMap& VoxelMap::operator=(const VoxelMap& other) {
+  if (this != &other) *this = VoxelMap(other);
+  return *this;
 }
-
-VoxelMap::Key VoxelMap::key_of(const Eigen::Vector3f& p) const {
-  const auto cell = [&](float v) {
-    return static_cast<std::int64_t>(std::floor(static_cast<double>(v) / voxel_size_m_));
-  };
-  return {cell(p.x()), cell(p.y()), cell(p.z())};
-}
+VoxelMap::VoxelMap(VoxelMap&&) noexcept = default;
+VoxelMap& VoxelMap::operator=(VoxelMap&&) noexcept = default;
 
 void VoxelMap::add(const PointCloud& cloud) {
-  const bool normals = cloud.has_normals(), covariances = cloud.has_covariances();
-  for (const std::uint32_t i : admitted(cloud)) {
-    Voxel& voxel = voxels_[key_of(cloud.points[i])];
-    voxel.points.push_back(cloud.points[i]);
-    ++points_;
-    if (normals) {
-      voxel.normals.push_back(cloud.normals[i]);
-      ++normals_;
-    }
-    if (covariances) {
-      voxel.covariances.push_back(cloud.covariances[i]);
-      ++covariances_;
-    }
-  }
+  hash_->add(cloud);
 }
 
-// The one admission rule, which add() applies: a finite point enters while its voxel holds fewer
-// than max_points_ points, counting those of `cloud` before it.
 std::vector<std::uint32_t> VoxelMap::admitted(const PointCloud& cloud) const {
-  std::vector<std::uint32_t> out;
-  std::unordered_map<Key, std::size_t, KeyHash> added;  // by this cloud, per voxel
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    if (!p.allFinite()) continue;
-    const Key key = key_of(p);
-    const auto it = voxels_.find(key);
-    std::size_t& mine = added[key];
-    if ((it == voxels_.end() ? 0 : it->second.points.size()) + mine >= max_points_) continue;
-    ++mine;
-    out.push_back(static_cast<std::uint32_t>(i));
-  }
-  return out;
+  return hash_->admitted(cloud);
 }
 
 void VoxelMap::remove_far_from(const Eigen::Vector3d& centre_m, double radius_m) {
-  const double r2 = radius_m * radius_m;
-  for (auto it = voxels_.begin(); it != voxels_.end();) {
-    const Voxel& v = it->second;
-    if ((v.points.front().cast<double>() - centre_m).squaredNorm() > r2) {
-      points_ -= v.points.size();
-      normals_ -= v.normals.size();
-      covariances_ -= v.covariances.size();
-      it = voxels_.erase(it);
-    } else {
-      ++it;
-    }
-  }
+  hash_->remove_far_from(centre_m, radius_m);
 }
 
-PointCloud VoxelMap::points() const {
-  PointCloud out;
-  const bool normals = points_ > 0 && normals_ == points_;
-  const bool covariances = points_ > 0 && covariances_ == points_;
-  out.points.reserve(points_);
-  if (normals) out.normals.reserve(points_);
-  if (covariances) out.covariances.reserve(points_);
-  for (const auto& [key, voxel] : voxels_) {
-    out.points.insert(out.points.end(), voxel.points.begin(), voxel.points.end());
-    if (normals) out.normals.insert(out.normals.end(), voxel.normals.begin(), voxel.normals.end());
-    if (covariances) {
-      out.covariances.insert(out.covariances.end(), voxel.covariances.begin(),
-                             voxel.covariances.end());
-    }
-  }
-  return out;
+const PointCloud& VoxelMap::points() const {
+  return hash_->cloud();
+}
+
+ReferenceIndex VoxelMap::index() const {
+  return ReferenceIndex::viewing(*hash_);
+}
+
+std::size_t VoxelMap::size() const noexcept {
+  return hash_->cloud().size();
+}
+
+std::size_t VoxelMap::voxels() const noexcept {
+  return hash_->voxels();
 }
 
 void VoxelMap::clear() {
-  voxels_.clear();
-  points_ = normals_ = covariances_ = 0;
+  hash_->clear();
 }
 
 }  // namespace sgdicp

@@ -14,6 +14,9 @@
 #include "sgdicp/points/scaling.hpp"
 
 namespace sgdicp {
+namespace detail {
+class VoxelHash;
+}
 
 struct Neighbor {
   std::uint32_t index = 0;        ///< index into the reference cloud
@@ -70,6 +73,11 @@ class ReferenceIndex {
   /// constructor, and InvalidSettingsError for a cell that is not positive and finite or is so
   /// small that the reference spans more than 2^21 cells along an axis.
   [[nodiscard]] static ReferenceIndex with_voxel_hash(PointCloud reference, double cell_m);
+  /// An index over a voxel hash kept elsewhere, read in place: no copy, no build (an odometry
+  /// map's, VoxelMap::index(), which grows and shrinks frame by frame). Valid while that hash
+  /// lives and is not changed; its surfaces come with its points (set_normals_and_covariances
+  /// throws). Throws InvalidInputError for an empty hash.
+  [[nodiscard]] static ReferenceIndex viewing(const detail::VoxelHash& hash);
   ~ReferenceIndex();
   ReferenceIndex(ReferenceIndex&&) noexcept;
   ReferenceIndex& operator=(ReferenceIndex&&) noexcept;

@@ -1,15 +1,18 @@
 #pragma once
-// The local map of odometry: a hash map of cubic voxels, each holding at most a bounded number of
-// points, updated incrementally (points added frame by frame, far voxels dropped), so its memory
-// is bounded by the region around the sensor and not by the length of the sequence.
+// The local map of odometry: cubic voxels, each holding at most a bounded number of points,
+// updated in place (points added frame by frame, far cells dropped), so its memory is bounded by
+// the region around the sensor and not by the length of the sequence. The map is its own nearest-
+// neighbour index (a voxel hash of cells of 2x2x2 voxels, src/index/voxel_hash.hpp): a frame is
+// registered against it as it stands, with no copy and no build (docs/odometry.md).
 #include <cstddef>
 #include <cstdint>
-#include <unordered_map>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "sgdicp/core/point_cloud.hpp"
+#include "sgdicp/index/nearest_neighbor.hpp"
 
 namespace sgdicp {
 
@@ -17,12 +20,18 @@ class VoxelMap {
  public:
   /// voxel_size_m > 0 and finite, max_points_per_voxel >= 1; InvalidSettingsError otherwise.
   VoxelMap(double voxel_size_m, std::size_t max_points_per_voxel);
+  ~VoxelMap();
+  VoxelMap(const VoxelMap& other);
+  VoxelMap& operator=(const VoxelMap& other);
+  VoxelMap(VoxelMap&&) noexcept;
+  VoxelMap& operator=(VoxelMap&&) noexcept;
 
   /// Adds the points of `cloud` (in the map frame): a point enters its voxel while the voxel
   /// holds fewer than max_points_per_voxel points, and is dropped otherwise (the first points
   /// of a voxel stay: a static world is seen again, not re-measured). Non-finite points are
-  /// skipped. The points' normals and covariances, when the cloud has them, enter with them
-  /// (estimated once per frame, not over the whole map each frame: docs/odometry.md).
+  /// skipped. The points' normals and covariances enter with them while every cloud added came
+  /// with them (estimated once per frame, not over the whole map each frame: docs/odometry.md).
+  /// Throws InvalidSettingsError for a coordinate too large for the voxel size.
   void add(const PointCloud& cloud);
 
   /// The indices of the points of `cloud` (in the map frame) that add(cloud) would keep, in
@@ -30,41 +39,29 @@ class VoxelMap {
   /// alone: on a slow Kinect walk most voxels are full and 5 % of a frame's points enter).
   [[nodiscard]] std::vector<std::uint32_t> admitted(const PointCloud& cloud) const;
 
-  /// Drops every voxel whose first point lies farther than radius_m from `centre_m`.
+  /// Drops every cell of 2x2x2 voxels whose first point lies farther than radius_m from
+  /// `centre_m`.
   void remove_far_from(const Eigen::Vector3d& centre_m, double radius_m);
 
-  /// Every point of the map, one cloud (the order of the voxels in the hash map), with normals
-  /// (covariances) when every point of the map came with one.
-  [[nodiscard]] PointCloud points() const;
+  /// Every point of the map, one cloud (in no particular order), with normals (covariances) when
+  /// every point of the map came with one.
+  [[nodiscard]] const PointCloud& points() const;
 
-  [[nodiscard]] std::size_t size() const noexcept { return points_; }
-  [[nodiscard]] std::size_t voxels() const noexcept { return voxels_.size(); }
-  [[nodiscard]] bool empty() const noexcept { return points_ == 0; }
+  /// A nearest-neighbour index over points(), read in place (ReferenceIndex::viewing): valid
+  /// until the map changes. Throws InvalidInputError for an empty map.
+  [[nodiscard]] ReferenceIndex index() const;
+
+  [[nodiscard]] std::size_t size() const noexcept;
+  [[nodiscard]] std::size_t voxels() const noexcept;
+  [[nodiscard]] bool empty() const noexcept { return size() == 0; }
   [[nodiscard]] double voxel_size_m() const noexcept { return voxel_size_m_; }
   [[nodiscard]] std::size_t max_points_per_voxel() const noexcept { return max_points_; }
   void clear();
 
  private:
-  struct Key {
-    std::int64_t x, y, z;
-    bool operator==(const Key&) const = default;
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const noexcept;
-  };
-  [[nodiscard]] Key key_of(const Eigen::Vector3f& p) const;
-
   double voxel_size_m_;
   std::size_t max_points_;
-  struct Voxel {
-    std::vector<Eigen::Vector3f> points;
-    std::vector<Eigen::Vector3f> normals;
-    std::vector<Eigen::Matrix3f> covariances;
-  };
-  std::size_t points_ = 0;
-  std::size_t normals_ = 0;      ///< points that came with a normal
-  std::size_t covariances_ = 0;  ///< ... with a covariance
-  std::unordered_map<Key, Voxel, KeyHash> voxels_;
+  std::unique_ptr<detail::VoxelHash> hash_;
 };
 
 }  // namespace sgdicp
