@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <optional>
 #include <random>
 #include <string>
@@ -18,6 +19,7 @@
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/index/nearest_neighbor.hpp"
 #include "sgdicp/io/io.hpp"
+#include "sgdicp/odometry/voxel_map.hpp"
 #include "test_support.hpp"
 
 namespace sgdicp {
@@ -203,6 +205,97 @@ TEST(VoxelHash, RealScansEqualTree) {
   for (const double cell : {0.05, 0.25, 1.0, 8.0}) {
     expect_hash_is_tree(cloud, queries, cell, {0.0025F, 0.09F, 1.0F});
   }
+}
+
+// The odometry map grows and shrinks its index in place. A plain model of its rule (a cell of
+// 2x2x2 voxels per std::map entry; a point enters while its voxel holds fewer than the bound; a
+// cell goes when its first point lies beyond the radius) says which points it must hold after
+// each frame; its index must answer as a tree built afresh over them, and every point's normal
+// must still be its own after the gaps of evicted cells were filled.
+namespace map_model {
+using Key = std::array<std::int64_t, 3>;
+struct Cell {
+  std::vector<Eigen::Vector3f> points;
+  std::map<Key, std::size_t> per_voxel;
+};
+Key floor_key(const Eigen::Vector3f& p, double size_m) {
+  return {static_cast<std::int64_t>(std::floor(static_cast<double>(p.x()) / size_m)),
+          static_cast<std::int64_t>(std::floor(static_cast<double>(p.y()) / size_m)),
+          static_cast<std::int64_t>(std::floor(static_cast<double>(p.z()) / size_m))};
+}
+Eigen::Vector3f normal_of(const Eigen::Vector3f& p) {  // a normal that names its point
+  return Eigen::Vector3f(p.x(), p.y() + 100.0F, p.z()).normalized();
+}
+std::vector<Eigen::Vector3f> sorted(std::vector<Eigen::Vector3f> v) {
+  std::sort(v.begin(), v.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+  });
+  return v;
+}
+}  // namespace map_model
+
+TEST(VoxelHash, AMapGrownAndEvictedInPlaceHoldsThePointsOfItsRuleAndAnswersAsATree) {
+  using namespace map_model;
+  constexpr double kVoxel = 0.25;
+  constexpr std::size_t kBound = 3;
+  constexpr double kRadius = 4.0;
+  std::mt19937_64 rng(7);
+  VoxelMap map(kVoxel, kBound);
+  std::map<Key, Cell> model;
+  for (int frame = 0; frame < 12; ++frame) {
+    SCOPED_TRACE("frame " + std::to_string(frame));
+    const Eigen::Vector3d centre(0.7 * frame, 0.2 * frame, 0.0);
+    PointCloud c = random_cloud(rng, 1500, 3.0);
+    for (auto& p : c.points) p += centre.cast<float>();
+    for (const auto& p : c.points) c.normals.push_back(normal_of(p));
+    map.add(c);
+    for (const auto& p : c.points) {
+      Cell& cell = model[floor_key(p, 2.0 * kVoxel)];
+      std::size_t& held = cell.per_voxel[floor_key(p, kVoxel)];
+      if (held < kBound) {
+        ++held;
+        cell.points.push_back(p);
+      }
+    }
+    map.remove_far_from(centre, kRadius);
+    std::erase_if(model, [&](const auto& entry) {
+      return (entry.second.points.front().template cast<double>() - centre).norm() > kRadius;
+    });
+
+    std::vector<Eigen::Vector3f> want;
+    for (const auto& [key, cell] : model)
+      want.insert(want.end(), cell.points.begin(), cell.points.end());
+    const PointCloud& held = map.points();
+    ASSERT_EQ(sorted(held.points), sorted(want));
+    ASSERT_TRUE(held.has_normals());
+    for (std::size_t i = 0; i < held.size(); ++i) {
+      ASSERT_EQ(held.normals[i], normal_of(held.points[i])) << "point " << i;
+    }
+    const ReferenceIndex tree(held);
+    const ReferenceIndex index = map.index();
+    for (const Eigen::Vector3f& q : queries_around(held, 4.0, 100 + frame, 200)) {
+      const Eigen::Vector3f shifted = q + centre.cast<float>();
+      expect_same_nearest(tree, index, shifted, kUnbounded);
+      expect_same_nearest(tree, index, shifted, 0.04F);
+      expect_same_nearest_and_bound(tree, index, shifted, 1.0F);
+      expect_same_k_nearest(tree, index, shifted, 10);
+      if (HasFatalFailure()) return;
+    }
+  }
+}
+
+TEST(VoxelHash, AMapViewRefusesSurfacesOfItsOwnAndAnEmptyMap) {
+  VoxelMap map(0.5, 2);
+  EXPECT_THROW((void)map.index(), InvalidInputError);
+  PointCloud two;
+  two.points = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0)};
+  map.add(two);
+  ReferenceIndex index = map.index();
+  EXPECT_EQ(index.size(), 2U);
+  EXPECT_THROW(index.set_normals_and_covariances({}, {}), InvalidInputError);
+  map.remove_far_from(Eigen::Vector3d(50, 0, 0), 1.0);
+  EXPECT_TRUE(map.empty());
+  EXPECT_THROW((void)map.index(), InvalidInputError);
 }
 
 TEST(VoxelHash, KeepsTheCloudAsGiven) {
