@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""sgd-icp odometry against KISS-ICP on the same frames, one run: lost frames, RPE, end drift and
-whole-run wall time (reading included on both sides), per sequence and frame rate.
+"""sgd-icp odometry against KISS-ICP on the same frames, one run: lost frames, RPE, end drift,
+ATE and whole-run wall time (reading included on both sides), per sequence and frame rate.
 
     python bench/compare_odometry.py ../shared/data/balm_handheld_lidar \\
         ../shared/data/sevenscenes_redkitchen --steps 1,2,3
@@ -113,6 +113,18 @@ def angle_deg(R: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))))
 
 
+def ate_rmse_m(est: np.ndarray, ref: np.ndarray) -> float:
+    """RMSE of the positions after the rigid least-squares alignment of the estimated onto the
+    reference positions (Umeyama 1991, no scale): evo_ape's ATE without --correct_scale. Unlike
+    the end drift, every frame's position counts, not the last one's alone."""
+    p, q = est[:, :3, 3], ref[:, :3, 3]
+    pc, qc = p - p.mean(axis=0), q - q.mean(axis=0)
+    U, _, Vt = np.linalg.svd(qc.T @ pc)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
+    aligned = (U @ D @ Vt @ pc.T).T + q.mean(axis=0)
+    return float(np.sqrt(np.mean(np.sum((aligned - q) ** 2, axis=1))))
+
+
 def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, float]:
     inv = np.linalg.inv
     E = [inv(inv(ref[k]) @ ref[k + 1]) @ (inv(est[k]) @ est[k + 1]) for k in range(len(est) - 1)]
@@ -128,6 +140,7 @@ def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, float]:
         "rpe_r_rmse_deg": float(np.sqrt(np.mean(r**2))),
         "end_percent": float(100 * np.linalg.norm(end[:3, 3]) / path),
         "end_deg": angle_deg(end[:3, :3]),
+        "ate_m": ate_rmse_m(est, ref),
     }
 
 
@@ -186,12 +199,13 @@ def run_kiss(seq: Sequence, voxel_size: float | None) -> tuple[np.ndarray, float
 
 def print_table(rows: list[tuple[str, str, dict[str, float], float, str]]) -> None:
     print("| sequence | run | lost | RPE median (mm / deg) | RPE RMSE (mm / deg) "
-          "| end drift (% / deg) | wall s (ms per frame) | notes |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| end drift (% / deg) | ATE RMSE (mm) | wall s (ms per frame) | notes |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for seq, name, m, wall, notes in rows:
         print(f"| {seq} | {name} | {m['lost']} | {1e3 * m['rpe_t_median_m']:.1f} / "
               f"{m['rpe_r_median_deg']:.3f} | {1e3 * m['rpe_t_rmse_m']:.1f} / "
               f"{m['rpe_r_rmse_deg']:.3f} | {m['end_percent']:.2f} / {m['end_deg']:.2f} | "
+              f"{1e3 * m['ate_m']:.1f} | "
               f"{wall:.1f} ({1e3 * wall / m['frames']:.0f}) | {notes} |")
 
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 
 namespace sgdicp::python {
@@ -161,6 +162,16 @@ py::list keyword_rows(const std::vector<Setting<S>>& table, const py::object& de
   return rows;
 }
 
+// The odometry's own keywords (odometry_settings_table): numbers, counted or real.
+py::list odometry_keyword_rows() {
+  py::list rows;
+  for (const auto& s : odometry_settings_table()) {
+    rows.append(
+        py::make_tuple(s.spelled(SettingNames::field), s.integer ? "count" : "real", py::none()));
+  }
+  return rows;
+}
+
 }  // namespace
 
 std::string keyword_summary(const py::module_& core, Solver solver, std::string_view indent) {
@@ -181,13 +192,17 @@ void bind_settings_keywords(py::module_& m) {
       [](const std::string& solver) {
         if (solver == "sgd")
           return keyword_rows(sgd_settings_table(), py::type::of<SgdSettings>()());
-        if (solver != "batch") throw py::value_error("solver must be 'sgd' or 'batch'");
+        if (solver == "odometry") return odometry_keyword_rows();
+        if (solver != "batch") {
+          throw py::value_error("solver must be 'sgd', 'batch' or 'odometry'");
+        }
         return keyword_rows(batch_settings_table(), py::type::of<BatchSettings>()());
       },
       py::arg("solver"),
-      "The keywords of Settings(**overrides) (solver 'sgd') or BatchSettings(**overrides) "
-      "('batch') as (keyword, kind, enum class name or None) in the table's order; kind is "
-      "'count', 'real', 'flag', 'distance' or 'choice'. Read by python/tools/stub_signatures.py.");
+      "The keywords of Settings(**overrides) (solver 'sgd'), BatchSettings(**overrides) "
+      "('batch') or Odometry's own ('odometry') as (keyword, kind, enum class name or None) in "
+      "the table's order; kind is 'count', 'real', 'flag', 'distance' or 'choice'. Read by "
+      "python/tools/stub_signatures.py.");
 }
 
 }  // namespace sgdicp::python

@@ -2,7 +2,8 @@
 
 Settings(**overrides), Settings.paper, Settings.replace, BatchSettings(**overrides) and its
 constructors, register() and ReferenceIndex.for_registration() take the flat keyword settings of
-the library's settings table (include/sgdicp/registration/settings.hpp). The stub spells each one
+the library's settings table (include/sgdicp/registration/settings.hpp); Odometry() takes the
+odometry's table's (include/sgdicp/odometry/odometry.hpp) and the registration's. The stub spells each one
 out, so that type checkers and IDEs know them; this module writes those parameters from
 _core._settings_keywords(), the table as the module reads it: one `keyword: type = ...` per
 setting, in table order, typed by its kind (count int, real float, flag bool, distance
@@ -35,7 +36,11 @@ SIGNATURES: dict[str, tuple[str, ...]] = {
     "BatchSettings.replace": ("batch",),
     "register": ("sgd", "batch"),
     "ReferenceIndex.for_registration": ("sgd", "batch"),
+    "Odometry.__init__": ("odometry", "sgd", "batch"),
 }
+# Keywords of those tables a function refuses: the odometry thins on its own grid (voxel_size=,
+# its own table's) and make_odometry raises for downsample_to=.
+REFUSED: dict[str, frozenset[str]] = {"Odometry.__init__": frozenset({"downsample_to"})}
 KIND_TYPES = {"count": "int", "real": "float", "flag": "bool", "distance": "_DistanceValue"}
 
 
@@ -104,11 +109,13 @@ def _offset(lines: list[str], line: int, column: int) -> int:
 class _Signature:
     """One settings signature of the stub: its `def ...:` header and the one the table makes."""
 
-    def __init__(self, text: str, fn: ast.FunctionDef, keywords: dict[str, str], own: set[str]):
+    def __init__(self, text: str, fn: ast.FunctionDef, keywords: dict[str, str], own: set[str],
+                 qualified: str):
         if fn.returns is None or fn.returns.end_lineno is None:
             raise ValueError(f"the stub's {fn.name} has no return type")
         self.text, self.fn, self.returns, self.own = text, fn, fn.returns, own
-        self.keywords = {k: v for k, v in keywords.items() if k not in own}
+        self.keywords = {k: v for k, v in keywords.items()
+                         if k not in own and k not in REFUSED.get(qualified, frozenset())}
         lines = text.split("\n")
         self.start = _offset(lines, fn.lineno, fn.col_offset)
         returns_end = _offset(lines, fn.returns.end_lineno, fn.returns.end_col_offset or 0)
@@ -159,7 +166,7 @@ def _signatures(text: str, module: ModuleType) -> dict[str, _Signature]:
     if missing:
         raise ValueError(f"the stub has no {', '.join(missing)}")
     return {name: _Signature(text, functions[name], keyword_types(module, solvers, aliases),
-                             own_parameters(module, name))
+                             own_parameters(module, name), name)
             for name, solvers in SIGNATURES.items()}
 
 

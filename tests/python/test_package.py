@@ -173,10 +173,26 @@ def test_a_new_setting_is_missing_from_the_stub_until_it_is_regenerated():
     missing = signatures.differences(STUB.read_text(), core)
     assert missing == [f"{name}: keyword new_knob= of the table is missing" for name in (
         "Settings.__init__", "Settings.paper", "Settings.replace", "register",
-        "ReferenceIndex.for_registration")]
+        "ReferenceIndex.for_registration", "Odometry.__init__")]
     regenerated = signatures.written(STUB.read_text(), core)
     assert signatures.differences(regenerated, core) == []
     assert "        new_knob: float = ...,\n    ) -> Settings:" in regenerated
+
+
+def test_odometry_keywords_are_its_table_and_the_registrations():
+    # Its own table's (max_points_per_voxel= a count), the registration's (the SGD and batch
+    # tables'), but not downsample_to=, which Odometry refuses (it thins on its own grid).
+    text = STUB.read_text()
+    header = text[text.index("class Odometry:"):]
+    header = header[header.index("def __init__("):header.index(") -> None:")]
+    assert "        max_points_per_voxel: int = ...,\n" in header
+    assert "        max_range: float = ...,\n" in header
+    assert "        batch_size: int = ...,\n" in header  # the SGD table's
+    assert "        damping: float = ...,\n" in header  # the batch table's
+    assert header.count("voxel_size:") == 1
+    assert "downsample_to" not in header
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="downsample_to"):
+        sgd_icp.Odometry(downsample_to=1000)
 
 
 def test_setting_docstrings_come_from_the_library_table():
