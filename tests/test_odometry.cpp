@@ -117,6 +117,27 @@ TEST(VoxelMap, MemoryIsBoundedOverALongSequence) {
   EXPECT_GT(largest, 21U * 7U);
 }
 
+TEST(VoxelMap, ASmallSceneWalkedForLongFillsItsVoxelsAndStopsGrowing) {
+  // 300 fresh samples of one 4 x 4 m floor, as a sensor circling a room for a long time sees it:
+  // no voxel leaves the radius, and the map stops growing once its voxels are full.
+  VoxelMap map(0.5, 5);
+  std::mt19937_64 rng(11);
+  std::size_t after_100 = 0;
+  for (int f = 0; f < 300; ++f) {
+    PointCloud c;
+    for (int i = 0; i < 400; ++i) {
+      c.points.emplace_back(static_cast<float>(test::uniform(rng, 0.0, 4.0)),
+                            static_cast<float>(test::uniform(rng, 0.0, 4.0)), 0.01F);
+    }
+    map.add(c);
+    map.remove_far_from(Eigen::Vector3d(2, 2, 0), 100.0);
+    if (f == 99) after_100 = map.size();
+  }
+  EXPECT_EQ(map.voxels(), 64U);  // 8 x 8 voxels of 0.5 m
+  EXPECT_EQ(map.size(), 64U * 5U);
+  EXPECT_EQ(after_100, map.size());
+}
+
 TEST(VoxelMap, RejectsBadSettings) {
   EXPECT_THROW(VoxelMap(0.0, 5), InvalidSettingsError);
   EXPECT_THROW(VoxelMap(std::nan(""), 5), InvalidSettingsError);
