@@ -1,5 +1,6 @@
 #pragma once
 // Helpers shared by the subcommands of the sgdicp tool.
+#include <stdexcept>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +12,20 @@
 #include "sgdicp/registration/registration.hpp"
 
 namespace sgdicp::cli {
+
+/// A run that finished with an answer that must not be used: main prints the message and exits
+/// with the code.
+class ExitStatus : public std::runtime_error {
+ public:
+  ExitStatus(const std::string& message, int code) : std::runtime_error(message), code_(code) {}
+  [[nodiscard]] int code() const noexcept { return code_; }
+
+ private:
+  int code_;
+};
+
+/// register --init global found no reliable global solution (1 is any other error).
+inline constexpr int kExitNoGlobalSolution = 3;
 
 /// How a depth image (a .png path) becomes a cloud: --intrinsics, --depth-scale, --max-depth,
 /// --min-depth, --pixel-stride (docs/depth.md).

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/points/random_downsample.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/registration.hpp"
@@ -270,6 +271,23 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
     b.record_trace = record_trace;
     run.result = align_batch(src, index, b, T_init);
   }
+  run.source_points = run.result.source_points;
+  run.reference_points = run.result.reference_points;
+  return run;
+}
+
+MethodRun run_method_global(const MethodSpec& m, const PointCloud& source,
+                            const PointCloud& reference) {
+  if (!m.stochastic || m.random_ratio) {
+    throw InvalidSettingsError("--init global: only with an SGD method (--method " + m.name +
+                               ") and without --random-ratio");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const ReferenceIndex index = reference_index_for(reference, m.sgd);
+  MethodRun run;
+  run.prepare_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  run.result = align_global(source, index, m.sgd);
   run.source_points = run.result.source_points;
   run.reference_points = run.result.reference_points;
   return run;

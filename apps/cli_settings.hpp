@@ -63,4 +63,9 @@ struct MethodRun {
                                    const PointCloud& reference, const Eigen::Matrix4d& T_init,
                                    bool record_trace = false);
 
+/// run_method without an initial guess (--init global): align_global on the same index. Only
+/// for the SGD methods; throws InvalidSettingsError for a batch method.
+[[nodiscard]] MethodRun run_method_global(const MethodSpec& m, const PointCloud& source,
+                                          const PointCloud& reference);
+
 }  // namespace sgdicp::cli

@@ -174,30 +174,51 @@ void warn_if_doubtful(const RegistrationResult& result) {
   }
 }
 
-void run(const RegisterOptions& o) {
-  const MethodSpec method = make_method(o.settings.method, o.settings);
-  check_options(o, method);
-  const Eigen::Matrix4d T_init =
-      o.init.empty() ? Eigen::Matrix4d::Identity() : parse_transform_option(o.init, "--init");
-  std::optional<Eigen::Matrix4d> T_gt;
-  if (!o.ground_truth.empty()) T_gt = parse_transform_option(o.ground_truth, "--ground-truth");
-  const PointCloud source = load_cloud(o.source, "source", !o.json, o.depth);
-  const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json, o.depth);
-  const MethodRun run = run_method(method, source, reference_cloud, T_init, !o.trace.empty());
-  const RegistrationResult& result = run.result;
-  write_outputs(o, source, reference_cloud, result);
+void print_global(const RegistrationResult& r) {
+  std::cout << std::setprecision(3) << "global: hypothesis " << r.global_winner_rank << " of "
+            << r.global_hypotheses << " won, overlap " << r.global_score << ", runner-up "
+            << r.global_runner_up_score << (r.global_ambiguous ? " (ambiguous)" : "") << ", "
+            << std::setprecision(1) << std::fixed << r.global_ms << " ms"
+            << (r.global_reliable ? "" : ": no reliable global solution") << '\n'
+            << std::defaultfloat;
+}
 
-  if (o.json) {
-    print_json(method, run, T_gt);
-    return;
-  }
-  print_result(method, run, source.size());
+void print_text(const RegisterOptions& o, const MethodSpec& method, const MethodRun& run,
+                std::size_t source_size, const std::optional<Eigen::Matrix4d>& T_gt) {
+  const RegistrationResult& result = run.result;
+  print_result(method, run, source_size);
+  if (result.global_init) print_global(result);
   if (T_gt) print_ground_truth_errors(result.T_reference_source, *T_gt);
   if (method.sgd.uncertainty.method != UncertaintyType::none && result.uncertainty_pairs > 0) {
     print_uncertainty(result);
   }
   if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
   warn_if_doubtful(result);
+}
+
+void run(const RegisterOptions& o) {
+  const MethodSpec method = make_method(o.settings.method, o.settings);
+  check_options(o, method);
+  const bool global = o.init == "global";
+  const Eigen::Matrix4d T_init = o.init.empty() || global
+                                     ? Eigen::Matrix4d::Identity()
+                                     : parse_transform_option(o.init, "--init");
+  std::optional<Eigen::Matrix4d> T_gt;
+  if (!o.ground_truth.empty()) T_gt = parse_transform_option(o.ground_truth, "--ground-truth");
+  const PointCloud source = load_cloud(o.source, "source", !o.json, o.depth);
+  const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json, o.depth);
+  const MethodRun run = global
+                            ? run_method_global(method, source, reference_cloud)
+                            : run_method(method, source, reference_cloud, T_init, !o.trace.empty());
+  const RegistrationResult& result = run.result;
+  write_outputs(o, source, reference_cloud, result);
+
+  if (o.json) {
+    print_json(method, run, T_gt);
+  } else {
+    print_text(o, method, run, source.size(), T_gt);
+  }
+  if (global && !result.global_reliable) throw ExitStatus(result.message, kExitNoGlobalSolution);
 }
 
 }  // namespace
@@ -214,8 +235,10 @@ void add_register_command(CLI::App& app) {
       ->required();
   cmd->add_option("REFERENCE", o->reference, "Reference cloud (fixed), same formats")->required();
   cmd->add_option("--init", o->init,
-                  "Initial T_reference_source: a file with a 4x4 or 3x4 row-major matrix, or 12/16 "
-                  "numbers inline (quoted) [default: identity]");
+                  "Initial T_reference_source: a file with a 4x4 or 3x4 row-major matrix, 12/16 "
+                  "numbers inline (quoted), or 'global': no initial guess, a global estimate "
+                  "(FPFH features, RANSAC; docs/global.md) then the registration from it; exit "
+                  "status 3 when no reliable global solution exists [default: identity]");
   cmd->add_option("--ground-truth", o->ground_truth,
                   "Ground-truth T_reference_source (file or 12/16 numbers): prints the errors");
   cmd->add_flag("--json", o->json,

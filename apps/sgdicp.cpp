@@ -21,6 +21,9 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const sgdicp::cli::ExitStatus& e) {
+    std::cerr << "sgdicp: " << e.what() << '\n';
+    return e.code();
   } catch (const sgdicp::Error& e) {
     std::cerr << "sgdicp: error: " << e.what() << '\n';
     return 1;

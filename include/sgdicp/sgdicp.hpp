@@ -10,6 +10,8 @@
 #include "sgdicp/costs/cost.hpp"
 #include "sgdicp/costs/point_to_point.hpp"
 #include "sgdicp/costs/robust_kernel.hpp"
+#include "sgdicp/global/fpfh.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/index/nearest_neighbor.hpp"
 #include "sgdicp/io/frame_source.hpp"
 #include "sgdicp/io/io.hpp"

@@ -104,6 +104,16 @@ struct RegistrationResult {
   double correlation_factor = 0.0;    ///< kappa: naive covariance too narrow by this factor
   std::size_t uncertainty_pairs = 0;  ///< pairs of the full-data pass at the optimum
   double uncertainty_ms = 0.0;        ///< wall time of the uncertainty (inside time_ms)
+
+  // Registration without an initial guess (align_global, docs/global.md); zero without it.
+  bool global_init = false;       ///< the start came from the global estimate
+  bool global_reliable = false;   ///< false: no reliable global solution (see `message`)
+  bool global_ambiguous = false;  ///< the runner-up scored within ambiguity_ratio of the winner
+  std::size_t global_winner_rank = 0;   ///< the winner's rank by feature consensus (0 = most)
+  std::size_t global_hypotheses = 0;    ///< distinct hypotheses verified
+  double global_score = 0.0;            ///< the winner's overlap (fraction of the source)
+  double global_runner_up_score = 0.0;  ///< the best other hypothesis's overlap
+  double global_ms = 0.0;               ///< wall time of the global estimate (inside time_ms)
 };
 
 /// Calls f(name, member pointer, description) for every field of RegistrationResult but the
@@ -158,6 +168,25 @@ void for_each_result_field(F&& f) {
     "With uncertainty: pairs of the full-data pass at the optimum.");
   f("uncertainty_ms", &R::uncertainty_ms,
     "With uncertainty: its wall time, milliseconds (included in time_ms).");
+  f("global_init", &R::global_init,
+    "True if the start came from the global estimate (init='global', --init global).");
+  f("global_reliable", &R::global_reliable,
+    "Global: False means no reliable global solution (too few points, no structure, an "
+    "ambiguous scene or degenerate geometry; see message): do not use the transform.");
+  f("global_ambiguous", &R::global_ambiguous,
+    "Global: the runner-up hypothesis overlaps nearly as much as the winner (a symmetric object, "
+    "a repetitive scene).");
+  f("global_winner_rank", &R::global_winner_rank,
+    "Global: the winning hypothesis's rank by feature consensus (0 = the most supported).");
+  f("global_hypotheses", &R::global_hypotheses, "Global: distinct hypotheses verified.");
+  f("global_score", &R::global_score,
+    "Global: the winner's overlap, the fraction of source points within 1.5 feature voxels of the "
+    "reference.");
+  f("global_runner_up_score", &R::global_runner_up_score,
+    "Global: the best other hypothesis's overlap (0 = none); near global_score, the scene is "
+    "ambiguous.");
+  f("global_ms", &R::global_ms,
+    "Global: wall time of the global estimate, milliseconds (included in time_ms).");
 }
 
 }  // namespace sgdicp

@@ -1,0 +1,159 @@
+// RANSAC with early exit and a short list of distinct hypotheses.
+#include "global/consensus.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+namespace sgdicp::detail {
+namespace {
+
+// The rigid T minimising sum |to_k - T from_k|^2 over the listed pairs (Kabsch, with the
+// reflection guard).
+Eigen::Matrix4d rigid_fit(const std::vector<Eigen::Vector3f>& from,
+                          const std::vector<Eigen::Vector3f>& to,
+                          const std::vector<std::uint32_t>& which) {
+  Eigen::Vector3d mean_from = Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean_to = Eigen::Vector3d::Zero();
+  for (const std::uint32_t k : which) {
+    mean_from += from[k].cast<double>();
+    mean_to += to[k].cast<double>();
+  }
+  mean_from /= static_cast<double>(which.size());
+  mean_to /= static_cast<double>(which.size());
+  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
+  for (const std::uint32_t k : which) {
+    cross += (to[k].cast<double>() - mean_to) * (from[k].cast<double>() - mean_from).transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = svd.matrixU() * d * svd.matrixV().transpose();
+  T.topRightCorner<3, 1>() = mean_to - T.topLeftCorner<3, 3>() * mean_from;
+  return T;
+}
+
+std::vector<std::uint32_t> inliers_of(const Eigen::Matrix4d& T,
+                                      const std::vector<Eigen::Vector3f>& from,
+                                      const std::vector<Eigen::Vector3f>& to, float distance2) {
+  const Eigen::Matrix3f R = T.topLeftCorner<3, 3>().cast<float>();
+  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t k = 0; k < from.size(); ++k) {
+    if ((R * from[k] + t - to[k]).squaredNorm() <= distance2) out.push_back(k);
+  }
+  return out;
+}
+
+std::size_t count_inliers(const Eigen::Matrix4d& T, const std::vector<Eigen::Vector3f>& from,
+                          const std::vector<Eigen::Vector3f>& to, float distance2) {
+  const Eigen::Matrix3f R = T.topLeftCorner<3, 3>().cast<float>();
+  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    n += (R * from[k] + t - to[k]).squaredNorm() <= distance2 ? 1 : 0;
+  }
+  return n;
+}
+
+// A rigid motion keeps lengths: the three edges of the sample agree, and are long enough to fix
+// a rotation.
+bool edges_agree(const std::vector<Eigen::Vector3f>& from, const std::vector<Eigen::Vector3f>& to,
+                 const std::uint32_t (&s)[3], const ConsensusSettings& settings) {
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3;
+    const double lf = (from[s[a]] - from[s[b]]).norm();
+    const double lt = (to[s[a]] - to[s[b]]).norm();
+    if (lf < settings.min_edge_m || lt < settings.min_edge_m) return false;
+    if (std::min(lf, lt) < settings.edge_ratio * std::max(lf, lt)) return false;
+  }
+  return true;
+}
+
+// Samples still needed for `confidence` at an inlier ratio w (3 points per sample).
+double samples_needed(double w, double confidence) {
+  const double good = w * w * w;
+  if (good <= 0.0) return std::numeric_limits<double>::infinity();
+  if (good >= 1.0) return 1.0;
+  return std::log(1.0 - confidence) / std::log(1.0 - good);
+}
+
+// Keeps `list` the `keep` best distinct hypotheses, most consensus first.
+void offer(std::vector<Hypothesis>& list, const Hypothesis& h, const ConsensusSettings& settings) {
+  for (Hypothesis& other : list) {
+    if (distinct(other.T_to_from, h.T_to_from, settings)) continue;
+    if (h.consensus > other.consensus) other = h;
+    std::stable_sort(list.begin(), list.end(), [](const Hypothesis& a, const Hypothesis& b) {
+      return a.consensus > b.consensus;
+    });
+    return;
+  }
+  if (list.size() == settings.keep && h.consensus <= list.back().consensus) return;
+  if (list.size() == settings.keep) list.pop_back();
+  const auto at = std::find_if(list.begin(), list.end(),
+                               [&](const Hypothesis& o) { return o.consensus < h.consensus; });
+  list.insert(at, h);
+}
+
+}  // namespace
+
+bool distinct(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b,
+              const ConsensusSettings& settings) {
+  const Eigen::Matrix3d dR = a.topLeftCorner<3, 3>().transpose() * b.topLeftCorner<3, 3>();
+  const double angle = std::acos(std::clamp((dR.trace() - 1.0) / 2.0, -1.0, 1.0));
+  const double shift = (a.topRightCorner<3, 1>() - b.topRightCorner<3, 1>()).norm();
+  return angle > settings.distinct_rotation_rad || shift > settings.distinct_translation_m;
+}
+
+Consensus find_consensus(const std::vector<Eigen::Vector3f>& from,
+                         const std::vector<Eigen::Vector3f>& to, const ConsensusSettings& settings,
+                         std::uint64_t seed) {
+  Consensus out;
+  const std::size_t n = from.size();
+  if (n < 3 || settings.keep == 0) return out;
+  const auto distance2 =
+      static_cast<float>(settings.inlier_distance_m * settings.inlier_distance_m);
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<std::uint32_t> pick(0, static_cast<std::uint32_t>(n - 1));
+  std::size_t best = 0;
+  while (
+      out.iterations < settings.max_iterations &&
+      static_cast<double>(out.iterations) <
+          samples_needed(static_cast<double>(best) / static_cast<double>(n), settings.confidence)) {
+    ++out.iterations;
+    std::uint32_t s[3] = {pick(rng), pick(rng), pick(rng)};
+    if (s[0] == s[1] || s[1] == s[2] || s[0] == s[2] || !edges_agree(from, to, s, settings))
+      continue;
+    const Hypothesis h{rigid_fit(from, to, {s[0], s[1], s[2]}), 0};
+    const std::size_t c = count_inliers(h.T_to_from, from, to, distance2);
+    if (c < 3) continue;
+    best = std::max(best, c);
+    offer(out.hypotheses, {h.T_to_from, c}, settings);
+  }
+  // Refit each on its inliers (twice: the fit moves the inlier set a little).
+  std::vector<Hypothesis> refitted;
+  for (Hypothesis h : out.hypotheses) {
+    for (int round = 0; round < 2; ++round) {
+      const std::vector<std::uint32_t> in = inliers_of(h.T_to_from, from, to, distance2);
+      if (in.size() < 3) break;
+      h = {rigid_fit(from, to, in), in.size()};
+    }
+    h.consensus = count_inliers(h.T_to_from, from, to, distance2);
+    if (std::none_of(refitted.begin(), refitted.end(), [&](const Hypothesis& o) {
+          return !distinct(o.T_to_from, h.T_to_from, settings);
+        })) {
+      refitted.push_back(h);
+    }
+  }
+  std::stable_sort(refitted.begin(), refitted.end(), [](const Hypothesis& a, const Hypothesis& b) {
+    return a.consensus > b.consensus;
+  });
+  out.hypotheses = std::move(refitted);
+  return out;
+}
+
+}  // namespace sgdicp::detail
