@@ -1193,6 +1193,38 @@ class RegistrationResult:
     def uncertainty_ms(self) -> float:
         """With uncertainty: its wall time, milliseconds (included in time_ms)."""
     @property
+    def global_init(self) -> bool:
+        """True if the start came from the global estimate (init='global', --init global)."""
+    @property
+    def global_reliable(self) -> bool:
+        """Global: False means no reliable global solution (too few points, no structure, an
+        ambiguous scene or degenerate geometry; see message): do not use the transform.
+        """
+    @property
+    def global_ambiguous(self) -> bool:
+        """Global: the runner-up hypothesis overlaps nearly as much as the winner (a symmetric
+        object, a repetitive scene).
+        """
+    @property
+    def global_winner_rank(self) -> int:
+        """Global: the winning hypothesis's rank by feature consensus (0 = the most supported)."""
+    @property
+    def global_hypotheses(self) -> int:
+        """Global: distinct hypotheses verified."""
+    @property
+    def global_score(self) -> float:
+        """Global: the winner's overlap, the fraction of source points within 1.5 feature voxels of
+        the reference.
+        """
+    @property
+    def global_runner_up_score(self) -> float:
+        """Global: the best other hypothesis's overlap (0 = none); near global_score, the scene is
+        ambiguous.
+        """
+    @property
+    def global_ms(self) -> float:
+        """Global: wall time of the global estimate, milliseconds (included in time_ms)."""
+    @property
     def covariance(self) -> npt.NDArray[np.float64]:
         """(6, 6) float64: covariance of theta = (x, y, z, roll, pitch, yaw) of T_reference_source
         (R = Rz(yaw) Ry(pitch) Rx(roll)), metres and radians; zeros unless uncertainty='laplace',
@@ -1221,7 +1253,7 @@ class RegistrationResult:
 def register(
     source: _Points,
     reference: Union[_Points, ReferenceIndex],
-    init: _Transform | None = None,
+    init: _Transform | Literal["global"] | None = None,
     settings: Settings | BatchSettings | None = None,
     method: _MethodName = "sgd",
     *,
@@ -1299,8 +1331,12 @@ def register(
         The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
         also from several threads at once; an array builds one for this call (result.build_ms),
         with the normals or covariances the cost needs.
-    init : (4, 4) array or None, default None (identity)
-        Initial T_reference_source; must be rigid.
+    init : (4, 4) array, None or 'global', default None (identity)
+        Initial T_reference_source; must be rigid. 'global': no initial guess; a global estimate
+        (FPFH features and RANSAC, verified against the reference; docs/global.md), then the SGD
+        registration from it. The result's global_* fields name the winning hypothesis, its score
+        and the runner-up's; global_reliable False means no reliable global solution (too few
+        points, no structure, an ambiguous scene): do not use the transform. SGD methods only.
     settings : Settings, BatchSettings or None, default None
         The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
         the batch methods (None = BatchSettings(), whose cost the method sets).

@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/registration.hpp"
@@ -106,9 +107,25 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
     throw InvalidSettingsError("method='" + std::string(m.name) +
                                "' sets the cost; drop cost= (or use method='sgd' with cost=)");
   }
+  const bool global = py::isinstance<py::str>(init);
+  if (global && init.cast<std::string>() != "global") {
+    throw InvalidInputError("init must be a (4, 4) array of numbers or 'global', got '" +
+                            init.cast<std::string>() + "'");
+  }
+  if (global && m.solver != Solver::sgd) {
+    throw InvalidSettingsError("init='global': only with an SGD method (method='" +
+                               std::string(m.name) + "')");
+  }
   const auto T_init = [&] {
     return init.is_none() ? Eigen::Matrix4d::Identity().eval() : matrix_from_array(init, "init");
   };
+  if (global) {
+    const SgdSettings s = sgd_settings_of(m, settings, overrides);
+    const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
+    return register_with(src, reference, needs_of(s, false), [&](const ReferenceIndex& index) {
+      return align_global(src.cloud, index, s);
+    });
+  }
   if (m.solver == Solver::sgd) {
     const SgdSettings s = sgd_settings_of(m, settings, overrides);
     const Eigen::Matrix4d T = T_init();
@@ -144,8 +161,12 @@ reference : (M, 3) array like `source`, or ReferenceIndex
     The fixed cloud. A ReferenceIndex is built once and reused by any number of registrations,
     also from several threads at once; an array builds one for this call (result.build_ms),
     with the normals or covariances the cost needs.
-init : (4, 4) array or None, default None (identity)
-    Initial T_reference_source; must be rigid.
+init : (4, 4) array, None or 'global', default None (identity)
+    Initial T_reference_source; must be rigid. 'global': no initial guess; a global estimate
+    (FPFH features and RANSAC, verified against the reference; docs/global.md), then the SGD
+    registration from it. The result's global_* fields name the winning hypothesis, its score
+    and the runner-up's; global_reliable False means no reliable global solution (too few
+    points, no structure, an ambiguous scene): do not use the transform. SGD methods only.
 settings : Settings, BatchSettings or None, default None
     The base settings: a Settings for the SGD methods (None = Settings()), a BatchSettings for
     the batch methods (None = BatchSettings(), whose cost the method sets).
