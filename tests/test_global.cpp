@@ -201,6 +201,17 @@ TEST(Global, TooFewPointsGiveNoSolution) {
   EXPECT_NE(r.message.find("no reliable global solution"), std::string::npos) << r.message;
 }
 
+TEST(Global, ALargeSourceAgainstASmallReferenceIsBounded) {
+  // The reference's 400 points set a fine feature grid; 200k source points over a scene 10x
+  // wider would keep most of them on it. The source's grid is capped instead.
+  const PointCloud reference = test::synthetic_scene(5, 400);
+  PointCloud source = test::synthetic_scene(6, 200000);
+  for (auto& p : source.points) p *= 10.0F;
+  const GlobalEstimate e = estimate_global(source, ReferenceIndex(reference));
+  EXPECT_LE(e.source_points, 10 * GlobalSettings{}.feature_points * 115 / 100);
+  EXPECT_GT(e.source_points, 0U);
+}
+
 TEST(Global, PlaneAndSphereGiveNoSolution) {
   for (const auto& [name, cloud] :
        {std::pair{"plane", plane(1, 5000)}, std::pair{"sphere", sphere(2, 5000)}}) {

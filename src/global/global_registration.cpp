@@ -20,7 +20,8 @@
 namespace sgdicp {
 namespace {
 
-constexpr std::size_t kScorePoints = 2000;  // source points that score a hypothesis
+constexpr std::size_t kScorePoints = 2000;    // source points that score a hypothesis
+constexpr std::size_t kMaxSourceFactor = 10;  // source grid points at most this x feature_points
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw InvalidSettingsError("GlobalSettings." + what);
@@ -144,6 +145,12 @@ EstimateOnGrid estimate_on_grid(const PointCloud& source, const ReferenceIndex& 
   PointCloud source_grid = source.empty() || !(e.feature_voxel_m > 0.0)
                                ? PointCloud{}
                                : points_only(source, e.feature_voxel_m);
+  if (source_grid.size() > kMaxSourceFactor * global.feature_points) {
+    // A source far larger than the reference (a map against a scan's grid): bounded work.
+    source_grid = points_only(
+        source, std::max(e.feature_voxel_m,
+                         voxel_size_for_count(source, kMaxSourceFactor * global.feature_points)));
+  }
   PointCloud reference_grid = points_only(reference.cloud(), grid_m);
   e.source_points = source_grid.size();
   e.reference_points = reference_grid.size();
