@@ -32,9 +32,12 @@ struct GlobalSettings {
   std::size_t max_iterations = 100000;  ///< RANSAC samples at most
   double confidence = 0.999;            ///< RANSAC stops once a better sample is this unlikely
   std::size_t hypotheses = 8;           ///< distinct hypotheses kept and verified
-  /// Hypotheses closer than this (rotation, or translation in voxels) are the same one.
+  /// Hypotheses closer than this (rotation, or translation in voxels) are the same one. 3
+  /// voxels, not 10: on the hand-held LiDAR 20 scans apart a pose shifted 5-7 m (7-9 voxels)
+  /// along the scene merged with the right one and, with more feature support, replaced it
+  /// (80 % solved on 20 turns; 95 % at 3 or 5 voxels, the other pairs unchanged).
   double distinct_rotation_deg = 10.0;
-  double distinct_translation_voxels = 10.0;
+  double distinct_translation_voxels = 3.0;
   /// align_global refines with SGD-ICP each of up to this many hypotheses (best coarse overlap
   /// first) whose overlap is at least half the best's, and scores them again at a finer
   /// distance: the winner and the runner-up are decided there.
