@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Registration without an initial guess (issue 37): sgd-icp's --init global against its peers.
+"""Registration without an initial guess: sgd-icp's --init global against its peers.
 
 usage: bench/compare_global.py [--turns 20] [--seed 37] [--datasets a,b] [--methods m,n]
                                [--sgdicp build/sgdicp] [--out DIR]
@@ -315,12 +315,16 @@ def report(rows, methods) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--turns", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=37)
+    parser.add_argument("--turns", type=int, default=20,
+                        help="seeded random turns per pair [default: 20]")
+    parser.add_argument("--seed", type=int, default=37, help="seed of the turns [default: 37]")
     parser.add_argument("--datasets", default="", help="comma-separated names (default: all)")
-    parser.add_argument("--methods", default=",".join(METHODS))
-    parser.add_argument("--sgdicp", default=os.path.join(REPO, "build", "sgdicp"))
-    parser.add_argument("--out", default=os.path.join(REPO, "build", "compare_global"))
+    parser.add_argument("--methods", default=",".join(METHODS),
+                        help=f"comma-separated [default: {','.join(METHODS)}]")
+    parser.add_argument("--sgdicp", default=os.path.join(REPO, "build", "sgdicp"),
+                        help="the CLI to run [default: build/sgdicp]")
+    parser.add_argument("--out", default=os.path.join(REPO, "build", "compare_global"),
+                        help="folder of the raw rows [default: build/compare_global]")
     args = parser.parse_args()
     args.methods = [m for m in args.methods.split(",") if m]
     unknown = [m for m in args.methods if m not in METHODS]
