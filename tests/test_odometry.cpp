@@ -451,5 +451,35 @@ TEST(OdometryHandheldLidar, EveryThirdScanKeepsTheTrackThroughA62DegreeTurn) {
   }
 }
 
+// The hand-held LiDAR swung round by 150 deg between its 4th and 5th scans (a sensor turned with
+// frames dropped; from then on every scan comes turned): the prediction and the last pose are
+// rejected, the wide basin does not reach that far, and the global registration against the map
+// (no guess) registers the frame; the scans after it follow from there. Before the global retry,
+// frames 4-7 were lost (141-157 deg off).
+TEST(OdometryHandheldLidar, AScanSpunBy150DegreesIsRecoveredByTheGlobalStart) {
+  const auto folder = std::filesystem::path(SGDICP_SHARED_DATA) / "balm_handheld_lidar";
+  if (!std::filesystem::exists(folder / "poses.txt")) GTEST_SKIP() << "no " << folder;
+  const FrameSource source = open_frame_source(folder / "scans");
+  const Trajectory truth = read_kitti_poses(folder / "poses.txt");
+  const Eigen::Matrix4d spin = make_transform(0, 0, 150.0 * kDeg, Eigen::Vector3d::Zero());
+  Odometry odometry;
+  std::vector<Eigen::Matrix4d> T_world;  // of the sensor as it is turned
+  for (std::size_t i = 0; i < 7; ++i) {
+    PointCloud scan = source.read(i);
+    if (i >= 4) scan = transformed(scan, spin.inverse());
+    odometry.register_frame(scan);
+    T_world.push_back(i >= 4 ? Eigen::Matrix4d(truth.poses[i] * spin) : truth.poses[i]);
+  }
+  EXPECT_EQ(odometry.lost_frames(), 0U);
+  EXPECT_EQ(odometry.reports()[4].start, FrameStart::global) << odometry.reports()[4].message;
+  for (std::size_t k = 1; k < T_world.size(); ++k) {
+    const Eigen::Matrix4d truth_step = T_world[k - 1].inverse() * T_world[k];
+    const Eigen::Matrix4d step = odometry.poses()[k - 1].inverse() * odometry.poses()[k];
+    EXPECT_LT(translation_error(step, truth_step), 0.05)
+        << k << ": " << odometry.reports()[k].message;
+    EXPECT_LT(rotation_error_geodesic(step, truth_step) * 180 / std::numbers::pi, 0.5) << k;
+  }
+}
+
 }  // namespace
 }  // namespace sgdicp

@@ -101,7 +101,7 @@ void bind_odometry(py::module_& m) {
                     "prediction was rejected (message says why; start says which retry).")
       .def_property_readonly(
           "start", [](const FrameReport& r) { return std::string(enum_name(r.start)); },
-          "Where the accepted registration started: 'prediction', 'last pose' or 'wide basin'.")
+          ("Where the accepted registration started: " + name_list<FrameStart>() + ".").c_str())
       .def_readonly("overlap", &FrameReport::overlap,
                     "Fraction of the registered frame's points with a map point within one map "
                     "voxel (a frame below half the recent frames' is rejected); 0 when not "

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/registration.hpp"
@@ -224,16 +225,18 @@ Eigen::Matrix4d Odometry::repeat_previous_pose(double started_ms) {
 RegistrationResult Odometry::align_to_map(const PointCloud& source, const ReferenceIndex& index,
                                           double sigma_m, const Eigen::Matrix4d& T_guess,
                                           FrameStart start) const {
-  if (start == FrameStart::wide_basin) {
+  if (start == FrameStart::wide_basin || start == FrameStart::global) {
     // SGD-ICP as `sgdicp register` runs it: d_max 0.5 scaled and the point-to-point coarse
     // stage, the basin that registers scans moved 30 m / 30 deg (docs/design.md), whatever the
-    // method; the map's surfaces serve the plane costs.
+    // method; the map's surfaces serve the plane costs. The global start needs no guess: its
+    // features propose, the same registration refines (docs/global.md).
     SgdSettings s = method_->solver == Solver::sgd ? sgd_ : SgdSettings{};
     if (method_->solver != Solver::sgd) s.cost = batch_.cost;
     s.max_correspondence_distance = SgdSettings{}.max_correspondence_distance;
     s.voxel_size_m = 0.0;
     s.downsample_to = 0;
-    return align(source, index, s, T_guess);
+    return start == FrameStart::global ? align_global(source, index, s)
+                                       : align(source, index, s, T_guess);
   }
   if (method_->solver == Solver::sgd) {
     SgdSettings s = sgd_;
@@ -279,6 +282,7 @@ double median_of(std::vector<double> v) {
 }  // namespace
 
 std::string Odometry::judge(const RegistrationResult& r, double overlap) const {
+  if (r.global_init && !r.global_reliable) return r.message;  // "no reliable global solution"
   if (!r.converged) return "not converged: " + r.message;
   // The bounds hold per frame since the last registered one (lost frames in between).
   const auto frames = static_cast<double>(lost_since_good_ + 1);
@@ -304,8 +308,8 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
   const double sigma = threshold_->sigma_m();
   if (settings_.adaptive_threshold) report.threshold_m = 3.0 * sigma;
   std::string rejected;
-  for (const FrameStart start :
-       {FrameStart::prediction, FrameStart::last_pose, FrameStart::wide_basin}) {
+  for (const FrameStart start : {FrameStart::prediction, FrameStart::last_pose,
+                                 FrameStart::wide_basin, FrameStart::global}) {
     const Eigen::Matrix4d T_guess = start == FrameStart::prediction ? T_prediction : T_last_good_;
     if (start == FrameStart::last_pose && T_guess.isApprox(T_prediction)) continue;
     RegistrationResult r;

@@ -121,11 +121,13 @@ enum class FrameStart {
   prediction,  ///< the constant-velocity prediction
   last_pose,   ///< the last registered pose, without the velocity (a retry)
   wide_basin,  ///< the last registered pose, with SGD-ICP's own wide basin (a retry)
+  global,      ///< no guess: the global registration against the map (the last retry)
 };
-inline constexpr std::array<EnumName<FrameStart>, 3> kFrameStartNames{{
+inline constexpr std::array<EnumName<FrameStart>, 4> kFrameStartNames{{
     {FrameStart::prediction, "prediction"},
     {FrameStart::last_pose, "last pose"},
     {FrameStart::wide_basin, "wide basin"},
+    {FrameStart::global, "global"},
 }};
 constexpr const auto& enum_names(FrameStart) {
   return kFrameStartNames;
