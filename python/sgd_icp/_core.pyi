@@ -1676,7 +1676,7 @@ class FrameReport:
         """
     @property
     def start(self) -> str:
-        """Where the accepted registration started: 'prediction', 'last pose' or 'wide basin'."""
+        """Where the accepted registration started: prediction, last pose, wide basin or global."""
     @property
     def overlap(self) -> float:
         """Fraction of the registered frame's points with a map point within one map voxel (a frame
