@@ -5,36 +5,18 @@
 #include <cmath>
 #include <random>
 
-#include <Eigen/LU>
-#include <Eigen/SVD>
+#include "core/rigid_fit.hpp"
 
 namespace sgdicp::detail {
 namespace {
 
-// The rigid T minimising sum |to_k - T from_k|^2 over the listed pairs (Kabsch, with the
-// reflection guard).
-Eigen::Matrix4d rigid_fit(const std::vector<Eigen::Vector3f>& from,
-                          const std::vector<Eigen::Vector3f>& to,
-                          const std::vector<std::uint32_t>& which) {
-  Eigen::Vector3d mean_from = Eigen::Vector3d::Zero();
-  Eigen::Vector3d mean_to = Eigen::Vector3d::Zero();
-  for (const std::uint32_t k : which) {
-    mean_from += from[k].cast<double>();
-    mean_to += to[k].cast<double>();
-  }
-  mean_from /= static_cast<double>(which.size());
-  mean_to /= static_cast<double>(which.size());
-  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
-  for (const std::uint32_t k : which) {
-    cross += (to[k].cast<double>() - mean_to) * (from[k].cast<double>() - mean_from).transpose();
-  }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
-  T.topLeftCorner<3, 3>() = svd.matrixU() * d * svd.matrixV().transpose();
-  T.topRightCorner<3, 1>() = mean_to - T.topLeftCorner<3, 3>() * mean_from;
-  return T;
+// The rigid T minimising sum |to_k - T from_k|^2 over the listed pairs (core/rigid_fit.hpp).
+Eigen::Matrix4d fit_listed(const std::vector<Eigen::Vector3f>& from,
+                           const std::vector<Eigen::Vector3f>& to,
+                           const std::vector<std::uint32_t>& which) {
+  return rigid_fit(which.size(), [&](std::size_t i) {
+    return FitPair{from[which[i]].cast<double>(), to[which[i]].cast<double>(), 1.0};
+  });
 }
 
 std::vector<std::uint32_t> inliers_of(const Eigen::Matrix4d& T,
@@ -128,7 +110,7 @@ Consensus find_consensus(const std::vector<Eigen::Vector3f>& from,
     std::uint32_t s[3] = {pick(rng), pick(rng), pick(rng)};
     if (s[0] == s[1] || s[1] == s[2] || s[0] == s[2] || !edges_agree(from, to, s, settings))
       continue;
-    const Hypothesis h{rigid_fit(from, to, {s[0], s[1], s[2]}), 0};
+    const Hypothesis h{fit_listed(from, to, {s[0], s[1], s[2]}), 0};
     const std::size_t c = count_inliers(h.T_to_from, from, to, distance2);
     if (c < 3) continue;
     best = std::max(best, c);
@@ -140,7 +122,7 @@ Consensus find_consensus(const std::vector<Eigen::Vector3f>& from,
     for (int round = 0; round < 2; ++round) {
       const std::vector<std::uint32_t> in = inliers_of(h.T_to_from, from, to, distance2);
       if (in.size() < 3) break;
-      h = {rigid_fit(from, to, in), in.size()};
+      h = {fit_listed(from, to, in), in.size()};
     }
     h.consensus = count_inliers(h.T_to_from, from, to, distance2);
     if (std::none_of(refitted.begin(), refitted.end(), [&](const Hypothesis& o) {

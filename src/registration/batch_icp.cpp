@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
+#include "core/rigid_fit.hpp"
 #include "registration/solver_support.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/points/scaling.hpp"
@@ -32,30 +33,13 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return m;
 }
 
-// The weighted least-squares rigid transform taking points a onto points b (Kabsch/Umeyama
-// without scale): centre both sets, SVD of the weighted cross-covariance, reflection fixed.
+// The weighted least-squares rigid transform taking points a onto points b (core/rigid_fit.hpp).
 Eigen::Matrix4d weighted_rigid_fit(const std::vector<Eigen::Vector3d>& a,
                                    const std::vector<Eigen::Vector3d>& b,
                                    const std::vector<double>& w) {
-  double w_sum = 0.0;
-  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    w_sum += w[i];
-    ca += w[i] * a[i];
-    cb += w[i] * b[i];
-  }
-  ca /= w_sum;
-  cb /= w_sum;
-  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i)
-    cross.noalias() += w[i] * (b[i] - cb) * (a[i] - ca).transpose();
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
-  Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
-  t.topLeftCorner<3, 3>() = svd.matrixU() * d * svd.matrixV().transpose();
-  t.topRightCorner<3, 1>() = cb - t.topLeftCorner<3, 3>() * ca;
-  return t;
+  return detail::rigid_fit(a.size(), [&](std::size_t i) {
+    return detail::FitPair{a[i], b[i], w[i]};
+  });
 }
 
 // The pairs of an iteration: every source point moved by T with its nearest reference point
