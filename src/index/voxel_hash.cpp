@@ -59,11 +59,9 @@ std::vector<std::uint32_t> VoxelHash::admitted(const PointCloud& cloud) const {
   return out;
 }
 
+// One pass: a point is admitted by the counts as they stand, which already hold the points of
+// `cloud` added before it (the rule admitted() states, without its second table).
 void VoxelHash::add(const PointCloud& cloud) {
-  const std::vector<std::uint32_t> in = admitted(cloud);
-  if (cloud_.size() + in.size() > std::numeric_limits<std::uint32_t>::max()) {
-    throw InvalidInputError("voxel hash: more than 2^32-1 points");
-  }
   if (cloud_.empty()) {
     normals_ = cloud.has_normals();
     covariances_ = cloud.has_covariances();
@@ -72,10 +70,16 @@ void VoxelHash::add(const PointCloud& cloud) {
   if (normals_ && !cloud.has_normals()) normals_ = false, cloud_.normals.clear();
   if (covariances_ && !cloud.has_covariances()) covariances_ = false, cloud_.covariances.clear();
   const VoxelGrid grid(0.5 * cell_m_, largest_coordinate_of(cloud));
-  for (const std::uint32_t i : in) {
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points[i];
+    if (!p.allFinite()) continue;
     const VoxelKey voxel = grid.key(p);
     std::uint32_t slot = cell_slots_.find(parent(voxel));
+    if (slot != KeySlots::kNone && cells_[slot].counts[octant(voxel)] >= max_points_) continue;
+    if (cloud_.size() == std::numeric_limits<std::uint32_t>::max()) {
+      refresh();
+      throw InvalidInputError("voxel hash: more than 2^32-1 points");
+    }
     if (slot == KeySlots::kNone) slot = add_cell(parent(voxel));
     Cell& cell = cells_[slot];
     const auto index = static_cast<std::uint32_t>(cloud_.size());
