@@ -13,6 +13,7 @@
 #include "sgdicp/core/format_number.hpp"
 #include "sgdicp/global/fpfh.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
+#include "sgdicp/registration/evaluation.hpp"
 #include "sgdicp/registration/registration.hpp"
 #include "sgdicp/surfaces/normals.hpp"
 #include "util/stopwatch.hpp"
@@ -62,22 +63,6 @@ Features features_of(PointCloud cloud, const GlobalSettings& global, double voxe
   return {std::move(cloud), std::move(fpfh)};
 }
 
-// Fraction of (up to kScorePoints of) the source's points that land within `distance_m` of the
-// reference.
-double overlap_score(const PointCloud& source, const ReferenceIndex& reference,
-                     const Eigen::Matrix4d& T, double distance_m) {
-  const Eigen::Matrix3f R = T.topLeftCorner<3, 3>().cast<float>();
-  const Eigen::Vector3f t = T.topRightCorner<3, 1>().cast<float>();
-  const auto d2 = static_cast<float>(distance_m * distance_m);
-  const std::size_t stride = std::max<std::size_t>(1, source.size() / kScorePoints);
-  std::size_t hits = 0;
-  std::size_t tried = 0;
-  for (std::size_t i = 0; i < source.size(); i += stride, ++tried) {
-    hits += reference.nearest(R * source.points[i] + t, d2).has_value() ? 1 : 0;
-  }
-  return tried == 0 ? 0.0 : static_cast<double>(hits) / static_cast<double>(tried);
-}
-
 detail::ConsensusSettings consensus_settings(const GlobalSettings& g, double voxel_m) {
   return {.inlier_distance_m = g.inlier_distance_voxels * voxel_m,
           .edge_ratio = 0.9,
@@ -95,8 +80,9 @@ void verify(GlobalEstimate& e, const detail::Consensus& consensus, const PointCl
   const double distance_m = g.inlier_distance_voxels * e.feature_voxel_m;
   for (std::size_t rank = 0; rank < consensus.hypotheses.size(); ++rank) {
     const detail::Hypothesis& h = consensus.hypotheses[rank];
-    e.hypotheses.push_back({h.T_to_from, h.consensus, rank,
-                            overlap_score(source, reference, h.T_to_from, distance_m)});
+    e.hypotheses.push_back(
+        {h.T_to_from, h.consensus, rank,
+         overlap_fraction(source, reference, h.T_to_from, distance_m, kScorePoints)});
   }
   std::stable_sort(
       e.hypotheses.begin(), e.hypotheses.end(),
@@ -204,8 +190,8 @@ std::vector<RegistrationResult> race(GlobalEstimate& e, const PointCloud& source
     if (k > 0 && h.score < 0.5 * best) break;
     RegistrationResult r = align(source, reference, settings, h.T_reference_source);
     const double fine =
-        overlap_score(source_grid, reference, between_stored(r.T_reference_source, o_s, o_r),
-                      g.fine_distance_voxels * e.feature_voxel_m);
+        overlap_fraction(source_grid, reference, between_stored(r.T_reference_source, o_s, o_r),
+                         g.fine_distance_voxels * e.feature_voxel_m, kScorePoints);
     const auto same = std::find_if(refined.begin(), refined.end(), [&](const GlobalHypothesis& o) {
       return !detail::distinct(o.T_reference_source, r.T_reference_source, rule);
     });

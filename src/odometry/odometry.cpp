@@ -9,6 +9,7 @@
 #include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/evaluation.hpp"
 #include "sgdicp/registration/registration.hpp"
 #include "sgdicp/surfaces/normals.hpp"
 #include "sgdicp/surfaces/prepare_reference.hpp"
@@ -251,27 +252,9 @@ RegistrationResult Odometry::align_to_map(const PointCloud& source, const Refere
 
 namespace {
 
-constexpr std::size_t kOverlapFrames = 10;  // recent registered frames whose overlap is the norm
-constexpr double kOverlapDrop = 0.5;        // a frame below this fraction of their median is off
-constexpr std::size_t kOverlapPoints = 1000;
-
-// The fraction of (at most kOverlapPoints evenly spread) source points that T puts within
-// radius_m of a map point.
-double overlap_fraction(const PointCloud& source, const ReferenceIndex& map,
-                        const Eigen::Matrix4d& T, double radius_m) {
-  if (source.empty() || !T.allFinite()) return 0.0;
-  const std::size_t stride = std::max<std::size_t>(1, source.size() / kOverlapPoints);
-  const Eigen::Matrix3d R = T.topLeftCorner<3, 3>();
-  const Eigen::Vector3d t = T.topRightCorner<3, 1>();
-  const auto radius2 = static_cast<float>(radius_m * radius_m);
-  std::size_t near = 0;
-  std::size_t looked = 0;
-  for (std::size_t i = 0; i < source.size(); i += stride, ++looked) {
-    const Eigen::Vector3f p = (R * source.points[i].cast<double>() + t).cast<float>();
-    near += map.nearest(p, radius2) ? 1 : 0;
-  }
-  return static_cast<double>(near) / static_cast<double>(looked);
-}
+constexpr std::size_t kOverlapFrames = 10;    // recent registered frames whose overlap is the norm
+constexpr double kOverlapDrop = 0.5;          // a frame below this fraction of their median is off
+constexpr std::size_t kOverlapPoints = 1000;  // frame points (evenly spread) its overlap looks at
 
 double median_of(std::vector<double> v) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
@@ -319,8 +302,9 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
     } catch (const InvalidInputError& e) {
       why = std::string("registration refused the frame: ") + e.what();
     }
-    const double overlap =
-        why.empty() ? overlap_fraction(source, index, r.T_reference_source, voxel_size_m_) : 0.0;
+    const double overlap = why.empty() ? overlap_fraction(source, index, r.T_reference_source,
+                                                          voxel_size_m_, kOverlapPoints)
+                                       : 0.0;
     if (why.empty()) why = judge(r, overlap);
     report.iterations += r.iterations;
     if (why.empty()) {

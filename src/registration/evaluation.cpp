@@ -209,4 +209,22 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
   check_degeneracy(pairs, reference, settings, normals, result);
 }
 
+double overlap_fraction(const PointCloud& source, const ReferenceIndex& reference,
+                        const Eigen::Matrix4d& T_reference_source, double radius_m,
+                        std::size_t max_points) {
+  if (source.empty() || !T_reference_source.allFinite()) return 0.0;
+  const std::size_t stride =
+      std::max<std::size_t>(1, source.size() / std::max<std::size_t>(1, max_points));
+  const Eigen::Matrix3d R = T_reference_source.topLeftCorner<3, 3>();
+  const Eigen::Vector3d t = T_reference_source.topRightCorner<3, 1>();
+  const auto radius2 = static_cast<float>(radius_m * radius_m);
+  std::size_t near = 0;
+  std::size_t looked = 0;
+  for (std::size_t i = 0; i < source.size(); i += stride, ++looked) {
+    const Eigen::Vector3f p = (R * source.points[i].cast<double>() + t).cast<float>();
+    near += reference.nearest(p, radius2) ? 1 : 0;
+  }
+  return static_cast<double>(near) / static_cast<double>(looked);
+}
+
 }  // namespace sgdicp

@@ -53,4 +53,12 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                         double max_distance_m, const EvaluationSettings& settings,
                         RegistrationResult& result, const ReferenceNormals& normals = {});
 
+/// The fraction of (at most max_points, evenly strided) source points that T_reference_source
+/// puts within radius_m of a reference point: how much of the source the reference covers
+/// there. 0 for an empty source or a non-finite T. The odometry judges a frame by it against the
+/// frames before it; the global registration scores its hypotheses by it.
+[[nodiscard]] double overlap_fraction(const PointCloud& source, const ReferenceIndex& reference,
+                                      const Eigen::Matrix4d& T_reference_source, double radius_m,
+                                      std::size_t max_points);
+
 }  // namespace sgdicp
