@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """sgd-icp odometry against KISS-ICP on the same frames, one run: lost frames, RPE, end drift,
-ATE and whole-run wall time (reading included on both sides), per sequence and frame rate.
+segment drift, ATE and whole-run wall time (reading included on both sides), per sequence and frame rate.
 
     python bench/compare_odometry.py ../shared/data/balm_handheld_lidar \\
         ../shared/data/sevenscenes_redkitchen --steps 1,2,3
@@ -36,7 +36,7 @@ import argparse
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
@@ -125,7 +125,30 @@ def ate_rmse_m(est: np.ndarray, ref: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.sum((aligned - q) ** 2, axis=1))))
 
 
-def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, float]:
+SEGMENT_FRACTIONS = (0.125, 0.25, 0.5)
+
+
+def segment_drift_percent(est: np.ndarray, ref: np.ndarray, fraction: float) -> float:
+    """The KITTI devkit's drift on segments of `fraction` of the path (its 100-800 m segments are
+    longer than these sequences): from every frame, the translation error of the relative pose to
+    the first frame a segment length further along the reference path, over that length, mean
+    over the start frames. Unlike the end drift, one lucky or unlucky last frame does not decide
+    it (errors that cancel by the end count)."""
+    inv = np.linalg.inv
+    steps = [np.linalg.norm(ref[k + 1][:3, 3] - ref[k][:3, 3]) for k in range(len(ref) - 1)]
+    along = np.concatenate([[0.0], np.cumsum(steps)])
+    length = fraction * along[-1]
+    errors = []
+    for i in range(len(ref)):
+        j = int(np.searchsorted(along, along[i] + length))
+        if j >= len(ref) or along[j] <= along[i]:
+            break
+        e = inv(inv(ref[i]) @ ref[j]) @ (inv(est[i]) @ est[j])
+        errors.append(np.linalg.norm(e[:3, 3]) / (along[j] - along[i]))
+    return float(100 * np.mean(errors)) if errors else float("nan")
+
+
+def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, Any]:
     inv = np.linalg.inv
     E = [inv(inv(ref[k]) @ ref[k + 1]) @ (inv(est[k]) @ est[k + 1]) for k in range(len(est) - 1)]
     t = np.array([np.linalg.norm(e[:3, 3]) for e in E])
@@ -141,6 +164,7 @@ def metrics(est: np.ndarray, ref: np.ndarray) -> dict[str, float]:
         "end_percent": float(100 * np.linalg.norm(end[:3, 3]) / path),
         "end_deg": angle_deg(end[:3, :3]),
         "ate_m": ate_rmse_m(est, ref),
+        "segments_percent": [segment_drift_percent(est, ref, f) for f in SEGMENT_FRACTIONS],
     }
 
 
@@ -197,14 +221,16 @@ def run_kiss(seq: Sequence, voxel_size: float | None) -> tuple[np.ndarray, float
     return np.array(poses), time.perf_counter() - start
 
 
-def print_table(rows: list[tuple[str, str, dict[str, float], float, str]]) -> None:
+def print_table(rows: list[tuple[str, str, dict[str, Any], float, str]]) -> None:
     print("| sequence | run | lost | RPE median (mm / deg) | RPE RMSE (mm / deg) "
-          "| end drift (% / deg) | ATE RMSE (mm) | wall s (ms per frame) | notes |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| end drift (% / deg) | segment drift (% at 1/8, 1/4, 1/2 of the path) "
+          "| ATE RMSE (mm) | wall s (ms per frame) | notes |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for seq, name, m, wall, notes in rows:
         print(f"| {seq} | {name} | {m['lost']} | {1e3 * m['rpe_t_median_m']:.1f} / "
               f"{m['rpe_r_median_deg']:.3f} | {1e3 * m['rpe_t_rmse_m']:.1f} / "
               f"{m['rpe_r_rmse_deg']:.3f} | {m['end_percent']:.2f} / {m['end_deg']:.2f} | "
+              f"{' / '.join(f'{x:.2f}' for x in m['segments_percent'])} | "
               f"{1e3 * m['ate_m']:.1f} | "
               f"{wall:.1f} ({1e3 * wall / m['frames']:.0f}) | {notes} |")
 

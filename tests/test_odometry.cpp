@@ -201,6 +201,51 @@ TEST(Odometry, FirstFrameIsTheIdentityAndEmptyFramesFail) {
   EXPECT_EQ(odometry.poses().size(), 2U);
 }
 
+namespace {
+Eigen::Matrix4d motion_of(double yaw_rad, const Eigen::Vector3d& t_m) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).matrix();
+  T.topRightCorner<3, 1>() = t_m;
+  return T;
+}
+}  // namespace
+
+TEST(MotionModel, ASteadyMotionIsPredictedAsItIs) {
+  MotionModel model;
+  EXPECT_TRUE(model.predicted().isIdentity());
+  const Eigen::Matrix4d step = motion_of(0.1, Eigen::Vector3d(0.5, 0.1, 0.0));
+  for (int k = 0; k < 10; ++k) model.update(step);
+  EXPECT_NEAR(model.rotation_carry(), 1.0, 1e-12);
+  EXPECT_NEAR(model.translation_carry(), 1.0, 1e-12);
+  EXPECT_TRUE(model.predicted().isApprox(step, 1e-12));
+  model.forget_last();  // frames lost: the motion since the last registered one is unknown
+  EXPECT_TRUE(model.predicted().isIdentity());
+}
+
+// A sensor swung to and fro (turns of alternating sign) while walking steadily: the turns do not
+// carry over, the walk does; before kMinPairs pairs, constant velocity.
+TEST(MotionModel, TurnsThatDoNotCarryOverAreNotPredicted) {
+  MotionModel model;
+  const Eigen::Vector3d walk(0.4, 0.0, 0.0);
+  for (std::size_t k = 0; k < MotionModel::kMinPairs; ++k) {
+    model.update(motion_of(k % 2 == 0 ? 0.3 : -0.3, walk));
+  }
+  EXPECT_EQ(model.rotation_carry(), 1.0) << "too few pairs: constant velocity";
+  for (int k = 0; k < 20; ++k) model.update(motion_of(k % 2 == 0 ? 0.3 : -0.3, walk));
+  EXPECT_EQ(model.rotation_carry(), 0.0) << "negative correlation is clamped to none";
+  EXPECT_NEAR(model.translation_carry(), 1.0, 1e-12);
+  EXPECT_TRUE(model.predicted().isApprox(motion_of(0.0, walk), 1e-12));
+  // Half of each turn carries over (a turn fading out, then a new one every ten frames): c = 1/2
+  // up to the new turns' tiny pairs (0.2 after 0.0004 rad).
+  MotionModel half;
+  double yaw = 0.2;
+  for (int k = 0; k < 40; ++k) {
+    half.update(motion_of(yaw, walk));
+    yaw = (k + 1) % 10 == 0 ? 0.2 : 0.5 * yaw;
+  }
+  EXPECT_NEAR(half.rotation_carry(), 0.5, 0.01);
+}
+
 TEST(Odometry, AFailedFrameGetsTheConstantVelocityPrediction) {
   const auto seq = test::synthetic_sequence(3, 0.4, 2.0, 2, 8000);
   Odometry odometry;

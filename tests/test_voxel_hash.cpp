@@ -234,6 +234,43 @@ std::vector<Eigen::Vector3f> sorted(std::vector<Eigen::Vector3f> v) {
 }
 }  // namespace map_model
 
+// The coarse view of a map answers as a tree over the first point each voxel received (in the
+// model, the first of the cell's points in that voxel), with the map's own point indices.
+void expect_coarse_view_of_first_points(const std::map<map_model::Key, map_model::Cell>& model,
+                                        double voxel_m, const ReferenceIndex& index,
+                                        const Eigen::Vector3f& centre, std::uint64_t seed) {
+  PointCloud firsts;
+  for (const auto& [key, cell] : model) {
+    std::map<map_model::Key, bool> seen;
+    for (const Eigen::Vector3f& p : cell.points) {
+      if (!seen[map_model::floor_key(p, voxel_m)]) firsts.points.push_back(p);
+      seen[map_model::floor_key(p, voxel_m)] = true;
+    }
+  }
+  const ReferenceIndex* coarse = index.coarse_view();
+  ASSERT_NE(coarse, nullptr);
+  EXPECT_EQ(coarse->coarse_view(), nullptr);
+  EXPECT_EQ(&coarse->cloud(), &index.cloud()) << "the same cloud, the same indices";
+  const ReferenceIndex tree(firsts);
+  for (const Eigen::Vector3f& around : queries_around(firsts, 4.0, seed, 200)) {
+    const Eigen::Vector3f q = around + centre;
+    for (const float bound : {std::numeric_limits<float>::max(), 0.04F}) {
+      const auto want = tree.nearest(q, bound);
+      const auto got = coarse->nearest(q, bound);
+      ASSERT_EQ(got.has_value(), want.has_value());
+      if (!want) continue;
+      ASSERT_EQ(got->squared_distance, want->squared_distance);
+      ASSERT_EQ(index.cloud().points[got->index], firsts.points[want->index]);
+    }
+    float want_others = 0.0F;
+    float got_others = 0.0F;
+    const auto want = tree.nearest_and_bound(q, 1.0F, want_others);
+    const auto got = coarse->nearest_and_bound(q, 1.0F, got_others);
+    ASSERT_EQ(got.has_value(), want.has_value());
+    ASSERT_EQ(got_others, want_others);
+  }
+}
+
 TEST(VoxelHash, AMapGrownAndEvictedInPlaceHoldsThePointsOfItsRuleAndAnswersAsATree) {
   using namespace map_model;
   constexpr double kVoxel = 0.25;
@@ -281,6 +318,8 @@ TEST(VoxelHash, AMapGrownAndEvictedInPlaceHoldsThePointsOfItsRuleAndAnswersAsATr
       expect_same_k_nearest(tree, index, shifted, 10);
       if (HasFatalFailure()) return;
     }
+    expect_coarse_view_of_first_points(model, kVoxel, index, centre.cast<float>(), 300 + frame);
+    if (HasFatalFailure()) return;
   }
 }
 

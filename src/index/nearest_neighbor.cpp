@@ -248,6 +248,8 @@ struct ReferenceIndex::Impl {
   std::vector<std::unique_ptr<KdTree>> subtree_pools;  // nodes of a threaded build
   std::optional<detail::VoxelHash> own_hash;
   const detail::VoxelHash* hash = nullptr;  // own_hash, or one viewed (an odometry map's)
+  bool first_per_voxel = false;             // a coarse view: the hash's first point per voxel
+  std::unique_ptr<ReferenceIndex> coarse;   // a map view's coarse view (coarse_view())
   double voxel_size_m = 0.0;
   // The bulk box, for the registrations that scale robustly: once, on first use, from any thread.
   std::once_flag bulk_once;
@@ -274,7 +276,8 @@ struct ReferenceIndex::Impl {
     hash = &*own_hash;
   }
 
-  explicit Impl(const detail::VoxelHash& viewed) : hash(&viewed) {}
+  Impl(const detail::VoxelHash& viewed, bool first_only)
+      : hash(&viewed), first_per_voxel(first_only) {}
 
   [[nodiscard]] const PointCloud& points() const { return hash ? hash->cloud() : cloud; }
   [[nodiscard]] const BoundingBox& bounds() const { return hash ? hash->box() : box; }
@@ -283,7 +286,7 @@ struct ReferenceIndex::Impl {
   template <class Result>
   void search(const Eigen::Vector3f& query, Result& result) const {
     if (hash) {
-      hash->search(query, result);
+      hash->search(query, result, first_per_voxel);
     } else {
       tree->findNeighbors(result, query.data(), nanoflann::SearchParams());
     }
@@ -340,7 +343,11 @@ ReferenceIndex ReferenceIndex::with_voxel_hash(PointCloud reference, double cell
 ReferenceIndex ReferenceIndex::viewing(const detail::VoxelHash& hash) {
   if (hash.cloud().empty()) throw InvalidInputError("reference cloud is empty");
   ReferenceIndex index;
-  index.impl_ = std::make_unique<Impl>(hash);
+  index.impl_ = std::make_unique<Impl>(hash, false);
+  if (hash.max_points_per_voxel() > 1) {
+    index.impl_->coarse.reset(new ReferenceIndex());
+    index.impl_->coarse->impl_ = std::make_unique<Impl>(hash, true);
+  }
   return index;
 }
 
@@ -384,6 +391,10 @@ const PointCloud& ReferenceIndex::cloud() const noexcept {
 double ReferenceIndex::voxel_size_m() const noexcept {
   return impl_->voxel_size_m;
 }
+const ReferenceIndex* ReferenceIndex::coarse_view() const noexcept {
+  return impl_->coarse.get();
+}
+
 double ReferenceIndex::voxel_hash_cell_m() const noexcept {
   return impl_->hash ? impl_->hash->cell_m() : 0.0;
 }

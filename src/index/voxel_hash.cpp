@@ -85,7 +85,10 @@ void VoxelHash::add(const PointCloud& cloud) {
     const auto index = static_cast<std::uint32_t>(cloud_.size());
     owners_.push_back({slot, static_cast<std::uint32_t>(cell.entries.size())});
     cell.entries.push_back({p, index});
-    if (cell.counts[octant(voxel)]++ == 0) ++voxels_;
+    if (cell.counts[octant(voxel)]++ == 0) {
+      ++voxels_;
+      keep_first(cell);
+    }
     cell.min = cell.min.cwiseMin(p);
     cell.max = cell.max.cwiseMax(p);
     cloud_.points.push_back(p);
@@ -93,6 +96,17 @@ void VoxelHash::add(const PointCloud& cloud) {
     if (covariances_) cloud_.covariances.push_back(cloud.covariances[i]);
   }
   refresh();
+}
+
+// The entry just appended is its voxel's first point: it moves to the end of the cell's firsts
+// (the entry there, a later point of another voxel, takes its place at the end).
+void VoxelHash::keep_first(Cell& cell) {
+  const std::uint32_t last = static_cast<std::uint32_t>(cell.entries.size() - 1);
+  const std::uint32_t to = cell.firsts++;
+  if (to == last) return;
+  std::swap(cell.entries[to], cell.entries[last]);
+  owners_[cell.entries[to].index].at = to;
+  owners_[cell.entries[last].index].at = last;
 }
 
 void VoxelHash::remove_far_from(const Eigen::Vector3d& centre_m, double radius_m) {

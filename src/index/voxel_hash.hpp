@@ -66,8 +66,10 @@ class VoxelHash {
 
   /// Offers every point that can be closer than result.worstDist() to result.addPoint(squared
   /// distance, index), as nanoflann's findNeighbors does with its result sets.
+  /// With first_per_voxel, only the first point each voxel received is offered (one point per
+  /// voxel: the coarse view of a map, ReferenceIndex::coarse_view()).
   template <class Result>
-  void search(const Eigen::Vector3f& query, Result& result) const {
+  void search(const Eigen::Vector3f& query, Result& result, bool first_per_voxel = false) const {
     if (!query.allFinite() || cells_.empty()) return;  // the tree finds nothing for it either
     const Eigen::Vector3d q = query.cast<double>();
     Key centre;
@@ -85,9 +87,10 @@ class VoxelHash {
       // Shells grow as r^2: past a few, the pyramid finds the far points for less.
       const auto side = static_cast<std::size_t>(2 * r + 1);
       if (r > kShells || side * side * side > cells_.size()) {
-        return visit_blocks(levels_.size(), roots_, query, Visited{centre, r - 1}, result);
+        return visit_blocks(levels_.size(), roots_, query, Visited{centre, r - 1, first_per_voxel},
+                            result);
       }
-      visit_shell(query, centre, r, result);
+      visit_shell(query, centre, r, first_per_voxel, result);
     }
   }
 
@@ -103,7 +106,8 @@ class VoxelHash {
     std::uint32_t index;  // into cloud_
   };
   struct Cell {
-    std::vector<Entry> entries;
+    std::vector<Entry> entries;  // each occupied voxel's first point first (`firsts` of them)
+    std::uint32_t firsts = 0;
     std::array<std::uint32_t, 8> counts{};  // points per voxel of the cell (by octant)
     Eigen::Vector3f min{Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity())};
     Eigen::Vector3f max{Eigen::Vector3f::Constant(-std::numeric_limits<float>::infinity())};
@@ -120,10 +124,11 @@ class VoxelHash {
     std::vector<VoxelKey> keys;
     std::vector<std::uint8_t> children;
   };
-  // The cells the shells visited: within Chebyshev radius r of centre.
+  // The cells the shells visited: within Chebyshev radius r of centre (and what they offered).
   struct Visited {
     Key centre;
     std::int64_t r;
+    bool first_per_voxel;
     [[nodiscard]] bool holds(const VoxelKey& key) const {
       return std::abs(key.x - centre[0]) <= r && std::abs(key.y - centre[1]) <= r &&
              std::abs(key.z - centre[2]) <= r;
@@ -171,7 +176,7 @@ class VoxelHash {
   // The cells at Chebyshev distance exactly r from centre (inside the grid), z, then y, then x.
   template <class Result>
   void visit_shell(const Eigen::Vector3f& query, const Key& centre, std::int64_t r,
-                   Result& result) const {
+                   bool first_per_voxel, Result& result) const {
     const Eigen::Vector3d q = query.cast<double>();
     const auto lo = [&](std::size_t d) { return std::max(centre[d] - r, first_[d]); };
     const auto hi = [&](std::size_t d) { return std::min(centre[d] + r, last_[d]); };
@@ -190,7 +195,7 @@ class VoxelHash {
           const double gx = gap(x, q.x(), cell_m_);
           if (beyond(gzy + gx * gx, result.worstDist())) continue;
           const std::uint32_t slot = cell_slots_.find(VoxelKey{x, y, z});
-          if (slot != KeySlots::kNone) visit_cell(slot, query, result);
+          if (slot != KeySlots::kNone) visit_cell(slot, query, first_per_voxel, result);
         }
       }
     }
@@ -214,7 +219,7 @@ class VoxelHash {
     const double size_m = std::ldexp(cell_m_, static_cast<int>(level));
     const auto visit = [&](std::uint32_t b) {
       if (level == 0) {
-        if (!visited.holds(keys[b])) visit_cell(b, query, result);
+        if (!visited.holds(keys[b])) visit_cell(b, query, visited.first_per_voxel, result);
         return;
       }
       std::array<std::uint32_t, 8> children{};
@@ -244,8 +249,12 @@ class VoxelHash {
   }
 
   template <class Result>
-  void visit_cell(std::uint32_t slot, const Eigen::Vector3f& query, Result& result) const {
-    for (const Entry& e : cells_[slot].entries) {
+  void visit_cell(std::uint32_t slot, const Eigen::Vector3f& query, bool first_per_voxel,
+                  Result& result) const {
+    const Cell& cell = cells_[slot];
+    const std::size_t n = first_per_voxel ? cell.firsts : cell.entries.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Entry& e = cell.entries[i];
       const float d = tree_squared_distance(query, e.point);
       if (d < result.worstDist()) result.addPoint(d, e.index);
     }
@@ -264,6 +273,7 @@ class VoxelHash {
   std::uint32_t add_cell(const VoxelKey& key);
   void remove_cell(std::uint32_t slot);
   void drop_point(std::uint32_t index);
+  void keep_first(Cell& cell);
   // Marks `key` (of level `level`) occupied in the levels above; unmark: no longer occupied.
   void mark_above(std::size_t level, VoxelKey key);
   void unmark_above(std::size_t level, VoxelKey key);

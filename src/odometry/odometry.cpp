@@ -86,6 +86,47 @@ double AdaptiveThreshold::sigma_m() const {
   return samples_ == 0 ? initial_m_ : std::sqrt(sum_squares_ / static_cast<double>(samples_));
 }
 
+// ---- motion model
+
+namespace {
+// The least-squares c of b = c a, in [0, 1] (1 without data).
+double carry(double ab, double aa) {
+  return aa > 0.0 ? std::clamp(ab / aa, 0.0, 1.0) : 1.0;
+}
+}  // namespace
+
+void MotionModel::update(const Eigen::Matrix4d& motion) {
+  const Eigen::AngleAxisd turn(Eigen::Matrix3d(motion.topLeftCorner<3, 3>()));
+  const Motion now{turn.angle() * turn.axis(), motion.topRightCorner<3, 1>()};
+  if (!now.rotation.allFinite() || !now.translation_m.allFinite()) return;
+  if (last_) {
+    rotation_ab_ += last_->rotation.dot(now.rotation);
+    rotation_aa_ += last_->rotation.squaredNorm();
+    translation_ab_ += last_->translation_m.dot(now.translation_m);
+    translation_aa_ += last_->translation_m.squaredNorm();
+    ++pairs_;
+  }
+  last_ = now;
+}
+
+double MotionModel::rotation_carry() const noexcept {
+  return pairs_ < kMinPairs ? 1.0 : carry(rotation_ab_, rotation_aa_);
+}
+
+double MotionModel::translation_carry() const noexcept {
+  return pairs_ < kMinPairs ? 1.0 : carry(translation_ab_, translation_aa_);
+}
+
+Eigen::Matrix4d MotionModel::predicted() const {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  if (!last_) return T;
+  const Eigen::Vector3d r = rotation_carry() * last_->rotation;
+  const double angle = r.norm();
+  if (angle > 0.0) T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, r / angle).matrix();
+  T.topRightCorner<3, 1>() = translation_carry() * last_->translation_m;
+  return T;
+}
+
 // ---- the pipeline
 
 PointCloud crop_range(const PointCloud& cloud, double min_range_m, double max_range_m) {
@@ -149,7 +190,7 @@ void Odometry::start(const PointCloud& cropped) {
 
 Eigen::Matrix4d Odometry::predicted() const {
   return poses_.empty() ? Eigen::Matrix4d::Identity()
-                        : Eigen::Matrix4d(poses_.back() * last_motion_);
+                        : Eigen::Matrix4d(poses_.back() * motion_.predicted());
 }
 
 PointCloud Odometry::map_cloud(double voxel_size_m) const {
@@ -217,9 +258,9 @@ Eigen::Matrix4d Odometry::repeat_previous_pose(double started_ms) {
   report.repeated = report.converged = true;
   report.message = "repeated frame (identical to the previous one): the previous pose";
   report.T_first_frame = poses_.back();
-  const Eigen::Matrix4d motion = last_motion_;
+  const MotionModel motion = motion_;
   const Eigen::Matrix4d T = finish(report, PointCloud{}, started_ms);
-  last_motion_ = motion;  // the motion goes on; the frame says nothing about it
+  motion_ = motion;  // the motion goes on; the frame says nothing about it
   return T;
 }
 
@@ -359,9 +400,11 @@ Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame
   if (!report.failed) {
     // The motion model learns only from two registered frames in a row: across lost frames the
     // motion per frame is unknown, so the next prediction is the pose itself.
-    last_motion_ = lost_since_good_ == 0 && !poses_.empty()
-                       ? Eigen::Matrix4d(rigid_inverse(T_last_good_) * T)
-                       : Eigen::Matrix4d::Identity();
+    if (lost_since_good_ == 0 && !poses_.empty()) {
+      motion_.update(rigid_inverse(T_last_good_) * T);
+    } else {
+      motion_.forget_last();
+    }
     T_last_good_ = T;
     lost_since_good_ = 0;
     if (report.overlap > 0.0) {

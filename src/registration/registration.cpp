@@ -61,6 +61,16 @@ class MiniBatchPairing {
     return reference_surfaces_.normal(i);
   }
 
+  // The index the pairs are searched in from now on: the reference, or its coarse view (one
+  // point per map voxel, the same cloud) for the coarse stage (SgdRun). What the memory
+  // certified for one does not hold for the other: it starts again.
+  void search_in(const ReferenceIndex& index) {
+    if (&index == search_) return;
+    search_ = &index;
+    memory_.reset();
+    queried_ = 0;
+  }
+
   // The cost of the pairs from now on (the coarse stage may pair with another, SgdRun).
   void use_cost(CostType cost) {
     cost_ = cost;
@@ -110,7 +120,7 @@ class MiniBatchPairing {
         const Eigen::Vector3f query = scaling_.to_metric(pair.moved).cast<float>();
         const auto nn = memory_
                             ? memory_->nearest(pair.source_index, query, d_max_sq_m, fresh_[slot])
-                            : reference_.nearest(query, d_max_sq_m);
+                            : search_->nearest(query, d_max_sq_m);
         pair.reference_index = nn ? nn->index : kNoPair;
         pair.distance = nn ? std::sqrt(nn->squared_distance) / k : 0.0f;
       }
@@ -134,7 +144,7 @@ class MiniBatchPairing {
   void remember_from_now_on(std::size_t batch_points) {
     if (memory_) return;
     queried_ += batch_points;
-    if (queried_ > source_.size()) memory_.emplace(reference_, source_.size());
+    if (queried_ > source_.size()) memory_.emplace(*search_, source_.size());
   }
 
   // The paper's pair cost without kernel or trimming: the short path of the hot loop. Kept
@@ -220,6 +230,7 @@ class MiniBatchPairing {
 
   const PointCloud& source_;
   const ReferenceIndex& reference_;
+  const ReferenceIndex* search_ = &reference_;  // reference_ or its coarse view
   detail::PointSurfaces reference_surfaces_;
   detail::PointSurfaces source_surfaces_;
   const UnitCubeScaling& scaling_;
@@ -245,6 +256,7 @@ class SgdRun {
          const UnitCubeScaling& scaling)
       : settings_(settings),
         scaling_(scaling),
+        reference_(reference),
         pairing_(source, source_index, reference, scaling, settings),
         sampler_(static_cast<std::uint32_t>(source.size()), settings.seed),
         optimizer_(settings.optimizer),
@@ -256,8 +268,14 @@ class SgdRun {
                   settings.refinement.min_distance.to_scaled(scaling.scale()),
                   settings.batch_size * settings.convergence.window) {
     batch_.reserve(settings.batch_size);
-    // The coarse stage pairs with its own cost when refinement stages follow.
-    if (settings.refinement.stages > 0) pairing_.use_cost(settings.coarse_cost);
+    // The coarse stage pairs with its own cost when refinement stages follow, and with one
+    // point per voxel of a map that keeps several (an odometry map): it only has to bring the
+    // pose into the refinement's basin, and its wide d_max makes each search in the full map
+    // visit thousands of points (docs/design.md, *Coarse view of the map*).
+    if (settings.refinement.stages > 0) {
+      pairing_.use_cost(settings.coarse_cost);
+      if (const ReferenceIndex* coarse = reference.coarse_view()) pairing_.search_in(*coarse);
+    }
   }
 
   // Runs from theta until converged, stopped or out of iterations (the reason goes into
@@ -296,6 +314,7 @@ class SgdRun {
   CostAccumulator cost_at(const std::vector<std::uint32_t>& batch, const PoseVector& theta,
                           bool with_hessian) {
     pairing_.use_cost(settings_.cost);  // also when the run ended in its coarse stage
+    pairing_.search_in(reference_);
     distances_.clear();
     return pairing_.accumulate(batch, EulerPoseJacobian(theta), schedule_.max_distance(),
                                with_hessian, distances_);
@@ -307,6 +326,7 @@ class SgdRun {
   // there (the half-cut car pair of tests/test_methods.cpp: 1.2-1.5 m off instead of < 0.5 m).
   void begin_refinement() {
     pairing_.use_cost(settings_.cost);
+    pairing_.search_in(reference_);
     const bool robust = settings_.kernel != KernelType::none || settings_.trim_ratio < 1.0;
     if (!settings_.refinement.gauss_newton || robust ||
         optimizer_.settings().type == OptimizerType::gauss_newton) {
@@ -360,6 +380,7 @@ class SgdRun {
 
   const SgdSettings& settings_;
   const UnitCubeScaling& scaling_;
+  const ReferenceIndex& reference_;
   MiniBatchPairing pairing_;
   EpochSampler sampler_;
   Optimizer optimizer_;

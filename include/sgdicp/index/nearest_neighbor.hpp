@@ -78,6 +78,10 @@ class ReferenceIndex {
   /// lives and is not changed; its surfaces come with its points (set_normals_and_covariances
   /// throws). Throws InvalidInputError for an empty hash.
   [[nodiscard]] static ReferenceIndex viewing(const detail::VoxelHash& hash);
+  /// A view of a map that keeps several points per voxel (viewing()) searching only the first
+  /// point each voxel received: one per voxel, the same cloud() and point indices. SGD-ICP's
+  /// coarse stage pairs with it (registration.hpp); nullptr for any other index.
+  [[nodiscard]] const ReferenceIndex* coarse_view() const noexcept;
   ~ReferenceIndex();
   ReferenceIndex(ReferenceIndex&&) noexcept;
   ReferenceIndex& operator=(ReferenceIndex&&) noexcept;
