@@ -296,6 +296,9 @@ namespace {
 constexpr std::size_t kOverlapFrames = 10;    // recent registered frames whose overlap is the norm
 constexpr double kOverlapDrop = 0.5;          // a frame below this fraction of their median is off
 constexpr std::size_t kOverlapPoints = 1000;  // frame points (evenly spread) its overlap looks at
+// A wide-basin registration and the global one are the same pose within these.
+constexpr double kConfirmDeg = 5.0;
+constexpr double kConfirmVoxels = 2.0;
 
 double median_of(std::vector<double> v) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
@@ -326,33 +329,65 @@ std::string Odometry::judge(const RegistrationResult& r, double overlap) const {
   return "";
 }
 
+Odometry::Attempt Odometry::attempt(const PointCloud& source, const ReferenceIndex& index,
+                                    double sigma_m, const Eigen::Matrix4d& T_guess,
+                                    FrameStart start) const {
+  Attempt a;
+  try {
+    a.result = align_to_map(source, index, sigma_m, T_guess, start);
+  } catch (const InvalidInputError& e) {
+    a.why = std::string("registration refused the frame: ") + e.what();
+    return a;
+  }
+  a.overlap =
+      overlap_fraction(source, index, a.result.T_reference_source, voxel_size_m_, kOverlapPoints);
+  a.why = judge(a.result, a.overlap);
+  return a;
+}
+
+// Whether the global registration's answer confirms the wide basin's: the same pose within a
+// few degrees and two map voxels ("" = confirmed).
+std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) const {
+  if (!global.why.empty()) return "the global registration does not confirm it: " + global.why;
+  const Eigen::Matrix4d d =
+      rigid_inverse(global.result.T_reference_source) * wide.result.T_reference_source;
+  const double turn_deg = rotation_angle_rad(d) * 180.0 / std::numbers::pi;
+  const double shift_m = d.topRightCorner<3, 1>().norm();
+  if (turn_deg <= kConfirmDeg && shift_m <= kConfirmVoxels * voxel_size_m_) return "";
+  return "the global registration ends " + format_number(turn_deg) + " deg and " +
+         format_number(shift_m) + " m from it";
+}
+
 void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& index,
                                double range_m, FrameReport& report) {
   const Eigen::Matrix4d T_prediction = report.T_first_frame;
   const double sigma = threshold_->sigma_m();
   if (settings_.adaptive_threshold) report.threshold_m = 3.0 * sigma;
   std::string rejected;
+  std::optional<Attempt> global;  // made to check the wide basin's answer
   for (const FrameStart start : {FrameStart::prediction, FrameStart::last_pose,
                                  FrameStart::wide_basin, FrameStart::global}) {
     const Eigen::Matrix4d T_guess = start == FrameStart::prediction ? T_prediction : T_last_good_;
     if (start == FrameStart::last_pose && T_guess.isApprox(T_prediction)) continue;
-    RegistrationResult r;
-    std::string why;
-    try {
-      r = align_to_map(source, index, sigma, T_guess, start);
-    } catch (const InvalidInputError& e) {
-      why = std::string("registration refused the frame: ") + e.what();
+    // The global start made to check the wide basin is not made again.
+    const bool made = start == FrameStart::global && global;
+    const Attempt a = made ? *global : attempt(source, index, sigma, T_guess, start);
+    if (!made) report.iterations += a.result.iterations;
+    std::string why = a.why;
+    // The wide basin reaches 30 deg (docs/design.md); in a scene nearly symmetric under a half
+    // turn it can also land on the mirror pose with a high overlap. Its answer stands only if
+    // the global registration, which scores the competing poses, confirms it.
+    if (why.empty() && start == FrameStart::wide_basin) {
+      global = attempt(source, index, sigma, T_last_good_, FrameStart::global);
+      report.iterations += global->result.iterations;
+      why = unconfirmed(a, *global);
     }
-    const double overlap = why.empty() ? overlap_fraction(source, index, r.T_reference_source,
-                                                          voxel_size_m_, kOverlapPoints)
-                                       : 0.0;
-    if (why.empty()) why = judge(r, overlap);
-    report.iterations += r.iterations;
+    const RegistrationResult& r = a.result;
     if (why.empty()) {
       report.converged = true;
       report.start = start;
       report.recovered = start != FrameStart::prediction;
-      report.overlap = overlap;
+      report.overlap = a.overlap;
       report.inlier_ratio = r.inlier_ratio;
       report.inlier_rmse_m = r.inlier_rmse_m;
       report.message = report.recovered ? "recovered from the " + std::string(enum_name(start)) +

@@ -253,6 +253,17 @@ class Odometry {
   /// beyond the bounds per frame since the last registered frame, or an overlap below half the
   /// recent frames'.
   [[nodiscard]] std::string judge(const RegistrationResult& r, double overlap) const;
+  /// One registration of the frame from `start`, judged ("" = accepted).
+  struct Attempt {
+    RegistrationResult result;
+    double overlap = 0.0;
+    std::string why;
+  };
+  [[nodiscard]] Attempt attempt(const PointCloud& source, const ReferenceIndex& index,
+                                double sigma_m, const Eigen::Matrix4d& T_guess,
+                                FrameStart start) const;
+  /// Why the global registration does not confirm a wide-basin one ("" = confirmed).
+  [[nodiscard]] std::string unconfirmed(const Attempt& wide, const Attempt& global) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
   /// Adds the frame's points at pose T, with the normals or covariances the cost needs.
   void add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T);
