@@ -135,6 +135,15 @@ void def_voxel_grid(py::class_<Class>& c) {
   def_count(c, "downsample_to", &Class::downsampling, &DownsamplingSettings::downsample_to, "");
 }
 
+template <typename Class>
+void def_distance(py::class_<Class>& c, const char* name, Distance Class::*member,
+                  const char* doc) {
+  c.def_property(
+      name, [member](const Class& s) { return s.*member; },
+      [member, name](Class& s, const py::handle& v) { s.*member = distance_from_object(v, name); },
+      doc);
+}
+
 template <typename Class, typename Group>
 void def_distance(py::class_<Class>& c, const char* name, Group Class::*group,
                   Distance Group::*member, const char* doc) {
