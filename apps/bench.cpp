@@ -428,7 +428,7 @@ class BenchTasks {
         perturbation_ ? perturbed(pair.T_reference_source_gt, *perturbation_, j * 1000003ULL + rep)
                       : Eigen::Matrix4d::Identity();
     MethodSpec m = methods_[task % methods_.size()];
-    m.sgd.seed += rep;
+    m.sgd.sampling.seed += rep;
     const MethodRun run = run_method(m, source, reference_cloud, T_init);
     return make_row(jobs_[j], m.name, rep, T_init, run);
   }
@@ -499,7 +499,7 @@ class BenchTasks {
 // What the small-source rules change of these settings (settings.hpp), for the summary line.
 std::string small_source_note(const SgdSettings& s) {
   std::vector<std::string> rules;
-  if (s.cap_batch_to_source) rules.emplace_back("m capped");
+  if (s.sampling.cap_batch_to_source) rules.emplace_back("m capped");
   // optimizer_for a source of no points: the small-source rule's step, if it takes one.
   if (optimizer_for(s, 0).type != s.optimizer.type) rules.emplace_back("Gauss-Newton coarse steps");
   if (rules.empty()) return "";
@@ -518,7 +518,7 @@ void print_method_summaries(const std::vector<MethodSpec>& methods, const std::v
     if (m.stochastic) {
       label += ", " + preset + " settings, optimizer " +
                std::string(to_string(m.sgd.optimizer.type)) +
-               ", m = " + std::to_string(m.sgd.batch_size) + small_source_note(m.sgd);
+               ", m = " + std::to_string(m.sgd.sampling.batch_size) + small_source_note(m.sgd);
     }
     print_summary(label, mine, thresholds);
   }

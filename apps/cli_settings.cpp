@@ -250,8 +250,8 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
   std::optional<PointCloud> small_source;
   std::optional<PointCloud> small_reference;
   if (m.random_ratio) {
-    small_source = random_downsample_ratio(source, *m.random_ratio, m.sgd.seed);
-    small_reference = random_downsample_ratio(reference, *m.random_ratio, m.sgd.seed);
+    small_source = random_downsample_ratio(source, *m.random_ratio, m.sgd.sampling.seed);
+    small_reference = random_downsample_ratio(reference, *m.random_ratio, m.sgd.sampling.seed);
   }
   const PointCloud& src = small_source ? *small_source : source;
   PointCloud ref = small_reference ? std::move(*small_reference) : reference;

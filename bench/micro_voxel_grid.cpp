@@ -19,7 +19,7 @@ namespace {
 
 using sgdicp::PointCloud;
 
-constexpr std::size_t kTarget = 20000;  // SgdSettings{}.downsample_to
+constexpr std::size_t kTarget = 20000;  // SgdSettings{}.downsampling.downsample_to
 
 void per_input_point(benchmark::State& state, const PointCloud& cloud) {
   state.counters["points"] = static_cast<double>(cloud.size());

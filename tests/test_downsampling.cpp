@@ -110,7 +110,8 @@ TEST(VoxelDownsample, HalvesMergeToTheOnePassResultOnAnyThreadCount) {
   // (a registration's grid) counts the same way.
   settings.num_threads = 1;
   const auto grid_on = [&](const NeighborhoodSettings& s) {
-    return sgdicp::detail::registration_index(cloud, 0.0, 2000, s, true, {});
+    return sgdicp::detail::registration_index(cloud, {.voxel_size_m = 0.0, .downsample_to = 2000},
+                                              s, true, {});
   };
   const sgdicp::ReferenceIndex grid_one = grid_on(settings);
   ASSERT_GT(grid_one.voxel_size_m(), 0.0);

@@ -135,7 +135,7 @@ Eigen::Vector3d coarse_key(const Eigen::Vector3f& p, double voxel_size_m, double
 TEST(LidarRings, ScanLinesTakeTheNormalsOfAGridThreeTimesCoarser) {
   const PointCloud rings = ground_rings();
   SgdSettings settings;
-  settings.downsample_to = 6000;
+  settings.downsampling.downsample_to = 6000;
   const ReferenceIndex index = reference_index_for(rings, settings);
   const double v = index.voxel_size_m();
   ASSERT_GT(v, 0.0);
@@ -161,7 +161,7 @@ TEST(LidarRings, ScanLinesTakeTheNormalsOfAGridThreeTimesCoarser) {
   const PointCloud blocks = voxel_downsample_with_surfaces(rings, v, neighborhood);
   EXPECT_EQ(fine.points, blocks.points);
   // The same grid given explicitly keeps its own blocks' normals (today's behaviour).
-  settings.voxel_size_m = v;
+  settings.downsampling.voxel_size_m = v;
   EXPECT_EQ(reference_index_for(rings, settings).cloud().normals, blocks.normals);
 }
 
@@ -182,9 +182,9 @@ TEST(LidarRings, CoarseNormalsRegisterSparseRingsMorePrecisely) {
     const PointCloud source = scan(scene, source_pose, 2 * pair + 1);
     const Eigen::Matrix4d truth = reference_pose.inverse() * source_pose;
     SgdSettings settings;
-    settings.seed = pair;
+    settings.sampling.seed = pair;
     const RegistrationResult by_data = align(source, reference, settings);
-    settings.voxel_size_m = by_data.voxel_size_m;
+    settings.downsampling.voxel_size_m = by_data.voxel_size_m;
     const RegistrationResult by_size = align(source, reference, settings);
     chosen.push_back(rotation_error_geodesic(by_data.T_reference_source, truth) / kDeg);
     given.push_back(rotation_error_geodesic(by_size.T_reference_source, truth) / kDeg);

@@ -57,15 +57,15 @@ RegistrationResult run(const Method& m, const PointCloud& source, const PointClo
   if (m.stochastic) {
     SgdSettings s;
     s.cost = m.cost;
-    s.kernel = o.kernel;
-    s.trim_ratio = o.trim;
+    s.pairing.kernel = o.kernel;
+    s.pairing.trim_ratio = o.trim;
     s.record_trace = o.trace;
     return align(source, index, s);
   }
   BatchSettings b;
   b.cost = m.cost;
-  b.kernel = o.kernel;
-  b.trim_ratio = o.trim;
+  b.pairing.kernel = o.kernel;
+  b.pairing.trim_ratio = o.trim;
   b.record_trace = o.trace;
   return align_batch(source, index, b);
 }
@@ -223,10 +223,11 @@ TEST(BatchSettingsValidation, AbsurdSettingsThrow) {
     mutate(s);
     EXPECT_THROW((void)align_batch(cloud, cloud, s), InvalidSettingsError);
   };
-  expect_invalid([](BatchSettings& s) { s.max_correspondence_distance = Distance::metres(-1); });
-  expect_invalid([](BatchSettings& s) { s.trim_ratio = 0.0; });
+  expect_invalid(
+      [](BatchSettings& s) { s.pairing.max_correspondence_distance = Distance::metres(-1); });
+  expect_invalid([](BatchSettings& s) { s.pairing.trim_ratio = 0.0; });
   expect_invalid([](BatchSettings& s) { s.max_iterations = 0; });
-  expect_invalid([](BatchSettings& s) { s.kernel_scale = Distance::scaled(0); });
+  expect_invalid([](BatchSettings& s) { s.pairing.kernel_scale = Distance::scaled(0); });
   expect_invalid([](BatchSettings& s) { s.initial_damping = -1; });
 }
 
@@ -298,8 +299,8 @@ TEST(BatchConvergence, PairsWithoutWeightAreNotConvergence) {
   const PointCloud source = synthetic_scene(47, 20000);
   ReferenceIndex reference(transformed(synthetic_scene(48, 20000), T_gt));
   BatchSettings s = BatchSettings::icp();
-  s.kernel = KernelType::welsch;
-  s.kernel_scale = Distance::scaled(1e-6);
+  s.pairing.kernel = KernelType::welsch;
+  s.pairing.kernel_scale = Distance::scaled(1e-6);
   const RegistrationResult r = align_batch(source, reference, s);
   EXPECT_FALSE(r.converged);
   EXPECT_EQ(r.stop_reason, StopReason::no_correspondences) << r.message;

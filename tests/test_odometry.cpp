@@ -289,7 +289,7 @@ TEST(Odometry, MethodCostAndAChosenCoarseCost) {
   const Odometry kept({}, "sgd-plane", chosen);
   EXPECT_EQ(kept.sgd_settings().cost, CostType::point_to_plane);
   EXPECT_EQ(kept.sgd_settings().coarse_cost, CostType::point_to_point);
-  EXPECT_EQ(kept.sgd_settings().downsample_to, 0U);  // the pipeline keeps its own grid
+  EXPECT_EQ(kept.sgd_settings().downsampling.downsample_to, 0U);  // the pipeline keeps its own grid
 }
 
 // twice), 5 mm noise.

@@ -118,7 +118,7 @@ TEST(Synthetic, SameSeedSameBitsOtherSeedOtherPath) {
   EXPECT_EQ(a.T_reference_source, b.T_reference_source);  // bitwise
   EXPECT_EQ(a.iterations, b.iterations);
   ASSERT_EQ(a.trace.size(), b.trace.size());
-  s.seed += 1;
+  s.sampling.seed += 1;
   const RegistrationResult c = align(source, reference, s);
   EXPECT_NE(a.T_reference_source, c.T_reference_source);
   EXPECT_LT(translation_error(c.T_reference_source, T_gt), 0.01);
@@ -134,15 +134,15 @@ TEST(Synthetic, TraceDescribesEveryIteration) {
   ASSERT_EQ(r.trace.size(), r.iterations);
   for (std::size_t i = 0; i < r.trace.size(); ++i) {
     EXPECT_EQ(r.trace[i].iteration, i + 1);
-    EXPECT_EQ(r.trace[i].points_processed, (i + 1) * s.batch_size);
-    EXPECT_LE(r.trace[i].inliers, s.batch_size);
+    EXPECT_EQ(r.trace[i].points_processed, (i + 1) * s.sampling.batch_size);
+    EXPECT_LE(r.trace[i].inliers, s.sampling.batch_size);
     EXPECT_GT(r.trace[i].step_size, 0.0);
     if (i > 0 && r.trace[i].inliers > 0) {
       // d_max grows back only after a mini-batch without any pair.
       EXPECT_LE(r.trace[i].max_distance_m, r.trace[i - 1].max_distance_m);
     }
   }
-  EXPECT_EQ(r.points_processed, r.iterations * s.batch_size);
+  EXPECT_EQ(r.points_processed, r.iterations * s.sampling.batch_size);
 }
 
 TEST(Synthetic, ResultIsTheMeanOfTheFinalStationaryWindow) {
@@ -212,7 +212,7 @@ TEST(Status, NoCorrespondencesIsReported) {
   const PointCloud reference =
       transformed(synthetic_scene(16), make_transform(0, 0, 0, {100, 0, 0}));
   SgdSettings s;
-  s.max_correspondence_distance = Distance::metres(0.1);
+  s.pairing.max_correspondence_distance = Distance::metres(0.1);
   const RegistrationResult r = align(source, reference, s);
   EXPECT_FALSE(r.converged);
   EXPECT_EQ(r.stop_reason, StopReason::no_correspondences);
@@ -227,9 +227,9 @@ TEST(Status, ExactCopyMinusOnePointConverges) {
   PointCloud copy = cloud;
   copy.points.pop_back();
   SgdSettings s;
-  s.batch_size = 50;
+  s.sampling.batch_size = 50;
   for (std::uint64_t seed = 1; seed <= 8; ++seed) {
-    s.seed = seed;
+    s.sampling.seed = seed;
     const RegistrationResult r = align(cloud, copy, s);
     EXPECT_TRUE(r.converged) << "seed " << seed << ": " << r.message;
     EXPECT_LT(translation_error(r.T_reference_source, Eigen::Matrix4d::Identity()), 0.01);
@@ -300,12 +300,13 @@ TEST(BadInput, AbsurdSettingsThrow) {
     mutate(s);
     EXPECT_THROW((void)align(cloud, cloud, s), InvalidSettingsError);
   };
-  expect_invalid([](SgdSettings& s) { s.batch_size = 0; });
+  expect_invalid([](SgdSettings& s) { s.sampling.batch_size = 0; });
   expect_invalid([](SgdSettings& s) { s.optimizer.learning_rate = -1.0; });
   expect_invalid([](SgdSettings& s) { s.optimizer.learning_rate = std::nan(""); });
-  expect_invalid([](SgdSettings& s) { s.max_correspondence_distance = Distance::metres(0.0); });
   expect_invalid(
-      [](SgdSettings& s) { s.max_correspondence_distance = Distance::scaled(INFINITY); });
+      [](SgdSettings& s) { s.pairing.max_correspondence_distance = Distance::metres(0.0); });
+  expect_invalid(
+      [](SgdSettings& s) { s.pairing.max_correspondence_distance = Distance::scaled(INFINITY); });
   expect_invalid([](SgdSettings& s) { s.optimizer.beta1 = 1.0; });
   expect_invalid([](SgdSettings& s) { s.convergence.window = 3; });
   expect_invalid([](SgdSettings& s) { s.convergence.chi2 = 0.0; });
@@ -386,7 +387,7 @@ TEST(RealData, KittiMovedCopiesTableII) {
     // Every point, with the paper's cost (point-to-plane at full resolution lost one copy, 17 m
     // off: its basin is narrower there than on the voxel grid).
     SgdSettings full;
-    full.downsample_to = 0;
+    full.downsampling.downsample_to = 0;
     full.cost = CostType::point_to_point;
     const PairRun every_point = run_pair(pair, full);
     EXPECT_TRUE(every_point.result.converged);
@@ -435,7 +436,7 @@ TEST(RealData, BunnyRotationMedianOverSeedsBeatsGicp) {
   std::vector<double> errors_deg;
   for (std::uint64_t seed = 1; seed <= 9; ++seed) {
     SgdSettings s;
-    s.seed = seed;
+    s.sampling.seed = seed;
     const RegistrationResult r = align(source, reference, s);
     EXPECT_TRUE(r.converged) << r.message;
     errors_deg.push_back(rotation_error_geodesic(r.T_reference_source, pair.T_reference_source_gt) /
@@ -490,14 +491,14 @@ TEST(SmallSource, CapsTheMiniBatch) {
   EXPECT_EQ(min_source_points(s), kMinCappedBatch);
   EXPECT_EQ(min_source_points(SgdSettings::paper()), 160u);
   SgdSettings small_m;  // a batch below kMinCappedBatch is never raised by the cap
-  small_m.batch_size = 16;
+  small_m.sampling.batch_size = 16;
   EXPECT_EQ(batch_size_for(small_m, 100), 16u);
 
   const Eigen::Matrix4d T_gt = make_transform(3 * kDeg, -2 * kDeg, 10 * kDeg, {0.1, -0.05, 0.05});
   const PointCloud reference = synthetic_scene(51, 4000);
   const PointCloud source = transformed(synthetic_scene(52, 400), T_gt.inverse());
   SgdSettings uncapped;
-  uncapped.cap_batch_to_source = false;
+  uncapped.sampling.cap_batch_to_source = false;
   const RegistrationResult capped = align(source, reference, s);
   const RegistrationResult full = align(source, reference, uncapped);
   EXPECT_EQ(capped.points_processed, capped.iterations * 40);
@@ -576,8 +577,8 @@ TEST(SmallSource, AWholeSourceBatchConvergesDespiteAPairingCycle) {
   s.cost = CostType::point_to_plane;
   s.coarse_cost = CostType::point_to_plane;
   s.optimizer = {OptimizerType::gauss_newton, default_learning_rate(OptimizerType::gauss_newton)};
-  s.batch_size = source.size();
-  s.cap_batch_to_source = false;
+  s.sampling.batch_size = source.size();
+  s.sampling.cap_batch_to_source = false;
   const RegistrationResult r = align(source, reference, s);
   EXPECT_TRUE(r.converged) << r.message;
   EXPECT_LT(r.iterations, 1000U);

@@ -134,7 +134,7 @@ TEST(RobustScaling, OneEvaluationPointDoesNotMakeTheSceneDegenerate) {
   const PointCloud source = synthetic_scene(46);
   const PointCloud reference = transformed(synthetic_scene(47), T_gt);
   SgdSettings settings;
-  settings.evaluation_points = 1;
+  settings.evaluation.evaluation_points = 1;
   const RegistrationResult r = align(source, reference, settings);
   EXPECT_EQ(r.evaluated_points, 1U);
   EXPECT_FALSE(r.degenerate) << r.message;

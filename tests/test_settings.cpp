@@ -108,7 +108,7 @@ TEST(SettingsTable, NamesAreUniqueAndSharedNamesMeanTheSameRange) {
 
 TEST(SettingsTable, ProductOfBatchAndWindowIsBounded) {
   SgdSettings s;
-  s.batch_size = 100000;
+  s.sampling.batch_size = 100000;
   s.convergence.window = 10000;
   EXPECT_NE(message_of(s, SettingNames::cli).find("--batch-size x --window"), std::string::npos);
 }

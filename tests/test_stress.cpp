@@ -66,7 +66,7 @@ RegistrationResult run(const Job& job, const std::vector<PointCloud>& sources,
   if (job.solver == Solver::sgd) {
     SgdSettings s;
     s.cost = job.cost;
-    s.seed = job.seed;
+    s.sampling.seed = job.seed;
     return align(sources[job.source], index, s, job.T_init);
   }
   BatchSettings b;
@@ -161,13 +161,13 @@ std::size_t resident_bytes() {
 // Runs `count` registrations of small clouds through each solver, discarding the results.
 void soak(std::size_t count, const std::vector<PointCloud>& sources, const ReferenceIndex& index) {
   SgdSettings sgd;
-  sgd.batch_size = 32;
+  sgd.sampling.batch_size = 32;
   sgd.max_iterations = 80;
   BatchSettings batch;
   batch.max_iterations = 20;
   for (std::size_t i = 0; i < count; ++i) {
     const PointCloud& source = sources[i % sources.size()];
-    sgd.seed = i;
+    sgd.sampling.seed = i;
     const RegistrationResult r =
         i % 2 == 0 ? align(source, index, sgd) : align_batch(source, index, batch);
     ASSERT_TRUE(r.T_reference_source.allFinite()) << i;

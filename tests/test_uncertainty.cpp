@@ -205,7 +205,7 @@ void expect_reproducible_samples(const PointCloud& source, const PointCloud& ref
   ASSERT_EQ(b.samples.size(), count);
   for (std::size_t i = 0; i < a.samples.size(); ++i) EXPECT_EQ(a.samples[i], b.samples[i]);
   EXPECT_EQ(a.covariance, b.covariance);
-  s.seed += 1;
+  s.sampling.seed += 1;
   const RegistrationResult c = align(source, reference, s);
   ASSERT_EQ(c.samples.size(), count);
   EXPECT_NE(a.samples.front(), c.samples.front());
@@ -268,7 +268,7 @@ TEST(Sgld, SampleCovarianceMatchesLaplaceAlongCorrelatedDirections) {
   const PointCloud reference = box_at_the_end_of_a_strip(21);
   const PointCloud source = noisy_source(reference, kTgt, kNoise_m, 22);
   SgdSettings s = uncertainty_settings(UncertaintyType::sgld, false, CostType::point_to_plane);
-  s.scaling_origin = ScalingOrigin::lower_corner;
+  s.scaling.origin = ScalingOrigin::lower_corner;
   s.uncertainty.samples = 2000;
   const RegistrationResult sgld = align(source, reference, s);
   ASSERT_TRUE(sgld.converged) << sgld.message;
@@ -302,7 +302,7 @@ TEST(Sgld, PointGradientsAtTheOptimumGiveTheChainOfPairingEveryBatch) {
   s.uncertainty.samples = 100;
   s.refinement.gauss_newton = false;  // trimming would turn it off: the same run both ways
   const RegistrationResult summed = align(source, reference, s);
-  s.trim_ratio = 0.9999999;  // ceil(0.9999999 * 160) = 160: nothing trimmed
+  s.pairing.trim_ratio = 0.9999999;  // ceil(0.9999999 * 160) = 160: nothing trimmed
   const RegistrationResult paired = align(source, reference, s);
   ASSERT_EQ(summed.samples.size(), 100U);
   ASSERT_EQ(paired.samples.size(), 100U);
@@ -480,7 +480,7 @@ TEST(Svgd, SymmetricObjectHasAModeAtEachSymmetricPose) {
   SgdSettings s = svgd_settings(64);
   // Pairs everywhere (no refinement of d_max): far particles feel the energy.
   s.refinement.stages = 0;
-  s.max_correspondence_distance = Distance::scaled(1.0);
+  s.pairing.max_correspondence_distance = Distance::scaled(1.0);
   s.uncertainty.svgd_iterations = 1000;
   s.uncertainty.method = UncertaintyType::laplace;
   const RegistrationResult laplace = align(source, reference, s);

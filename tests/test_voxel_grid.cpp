@@ -305,7 +305,7 @@ TEST(VoxelSurfaces, AgreeWithNearestNeighbourNormalsOnAKinectFrame) {
 TEST(RegistrationVoxelGrid, DenseGridsCarryTheirBlocksSurfaces) {
   const PointCloud scene = synthetic_scene(6);  // 60k points
   SgdSettings dense;
-  dense.downsample_to = 8000;  // ~7.5 points per voxel
+  dense.downsampling.downsample_to = 8000;  // ~7.5 points per voxel
   const ReferenceIndex index = reference_index_for(scene, dense);
   NeighborhoodSettings neighborhood = dense.neighborhood;
   neighborhood.num_threads = 1;
@@ -317,7 +317,7 @@ TEST(RegistrationVoxelGrid, DenseGridsCarryTheirBlocksSurfaces) {
   EXPECT_EQ(index.cloud().normals, blocks.normals);
   EXPECT_EQ(index.cloud().covariances, blocks.covariances);
   SgdSettings sparse = dense;
-  sparse.downsample_to = 40000;  // ~1.5 points per voxel
+  sparse.downsampling.downsample_to = 40000;  // ~1.5 points per voxel
   EXPECT_FALSE(reference_index_for(scene, sparse).cloud().has_normals());
   SgdSettings point = dense;
   point.cost = CostType::point_to_point;
@@ -331,7 +331,7 @@ TEST(RegistrationVoxelGrid, BothCloudsOnTheReferencesGrid) {
   const PointCloud source = synthetic_scene(41);
   const PointCloud reference = transformed(synthetic_scene(42), T_gt);
   SgdSettings s;
-  s.downsample_to = 8000;
+  s.downsampling.downsample_to = 8000;
   const RegistrationResult direct = align(source, reference, s);
   const ReferenceIndex index = reference_index_for(reference, s);
   const double v = voxel_size_for_count(reference, 8000);
@@ -347,7 +347,7 @@ TEST(RegistrationVoxelGrid, BothCloudsOnTheReferencesGrid) {
   EXPECT_LT(rotation_error_geodesic(direct.T_reference_source, T_gt), 0.2 * kDeg);
 
   SgdSettings fixed = s;
-  fixed.voxel_size_m = v;
+  fixed.downsampling.voxel_size_m = v;
   EXPECT_EQ(align(source, reference, fixed).T_reference_source, direct.T_reference_source);
 
   // An index built from the cloud as given: both clouds are used as given.
@@ -356,14 +356,14 @@ TEST(RegistrationVoxelGrid, BothCloudsOnTheReferencesGrid) {
   EXPECT_EQ(every.source_points, source.size());
   EXPECT_EQ(every.reference_points, reference.size());
   SgdSettings none = s;
-  none.downsample_to = 0;
+  none.downsampling.downsample_to = 0;
   EXPECT_EQ(align(source, reference, none).T_reference_source, every.T_reference_source);
 }
 
 TEST(RegistrationVoxelGrid, PaperPresetAndBatchBaselinesUseEveryPoint) {
-  EXPECT_EQ(SgdSettings::paper().downsample_to, 0U);
-  EXPECT_EQ(SgdSettings::paper().voxel_size_m, 0.0);
-  EXPECT_EQ(BatchSettings{}.downsample_to, 0U);
+  EXPECT_EQ(SgdSettings::paper().downsampling.downsample_to, 0U);
+  EXPECT_EQ(SgdSettings::paper().downsampling.voxel_size_m, 0.0);
+  EXPECT_EQ(BatchSettings{}.downsampling.downsample_to, 0U);
   const PointCloud source = synthetic_scene(41, 30000);
   const PointCloud reference = synthetic_scene(42, 30000);
   const RegistrationResult paper = align(source, reference, SgdSettings::paper());
@@ -372,7 +372,7 @@ TEST(RegistrationVoxelGrid, PaperPresetAndBatchBaselinesUseEveryPoint) {
   const RegistrationResult icp = align_batch(source, reference, BatchSettings::icp());
   EXPECT_EQ(icp.source_points, source.size());
   BatchSettings thinned = BatchSettings::icp();
-  thinned.downsample_to = 5000;
+  thinned.downsampling.downsample_to = 5000;
   const RegistrationResult thin_icp = align_batch(source, reference, thinned);
   EXPECT_GT(thin_icp.voxel_size_m, 0.0);
   EXPECT_LT(thin_icp.source_points, 7000U);
@@ -381,7 +381,7 @@ TEST(RegistrationVoxelGrid, PaperPresetAndBatchBaselinesUseEveryPoint) {
 TEST(RegistrationVoxelGrid, AGridTooCoarseForTheMiniBatchIsAClearError) {
   const PointCloud scene = synthetic_scene(6, 20000);
   SgdSettings s;
-  s.voxel_size_m = 3.0;  // a handful of voxels on a 6 m scene, fewer than 160 points
+  s.downsampling.voxel_size_m = 3.0;  // a handful of voxels on a 6 m scene, fewer than 160 points
   try {
     (void)align(scene, scene, s);
     FAIL() << "expected InvalidInputError";
@@ -401,7 +401,7 @@ TEST(RegistrationVoxelGrid, ThreadsGiveTheSameResult) {
     SgdSettings one;
     BatchSettings unused;
     apply_method_cost(method_from_string(name), one, unused);
-    one.downsample_to = 8000;
+    one.downsampling.downsample_to = 8000;
     SgdSettings two = one;
     two.num_threads = 2;
     const ReferenceIndex threaded = reference_index_for(reference, two);
@@ -421,7 +421,7 @@ TEST(RegistrationVoxelGrid, ThreadsGiveTheSameResult) {
 TEST(RegistrationVoxelGrid, TreeAlongsideTheSurfacesGivesTheOneThreadIndex) {
   const PointCloud reference = synthetic_scene(43, 40000);
   SgdSettings one;
-  one.downsample_to = 6000;
+  one.downsampling.downsample_to = 6000;
   one.num_threads = 1;
   const ReferenceIndex single = reference_index_for(reference, one);
   ASSERT_TRUE(single.cloud().has_normals());
@@ -451,7 +451,7 @@ TEST(CoarseCost, OnlyTheFirstStageOfARefinedRun) {
   const PointCloud source = synthetic_scene(41, 20000);
   const PointCloud reference = transformed(synthetic_scene(42, 20000), T_gt);
   SgdSettings hybrid;
-  hybrid.downsample_to = 0;
+  hybrid.downsampling.downsample_to = 0;
   ASSERT_EQ(hybrid.cost, CostType::point_to_plane);
   ASSERT_EQ(hybrid.coarse_cost, CostType::point_to_point);
   SgdSettings plane = hybrid;

@@ -187,7 +187,7 @@ void bind_preprocessing(py::module_& m) {
         }();
         return array_from_cloud(std::move(out));
       },
-      kRandomDoc, "points"_a, "count"_a, "seed"_a = SgdSettings{}.seed);
+      kRandomDoc, "points"_a, "count"_a, "seed"_a = SgdSettings{}.sampling.seed);
 
   m.def(
       "estimate_normals",

@@ -81,18 +81,58 @@ void def_flag(py::class_<Class>& c, const char* name, bool Class::*member, const
       [member, name](Class& s, const py::handle& v) { s.*member = as_bool(v, name); }, doc);
 }
 
-// voxel_size_m and downsample_to, which both settings classes have (settings.hpp).
+// The same for a member of a group (SgdSettings::sampling.batch_size), which Python keeps as a
+// flat attribute of the settings class (settings_docs.cpp, python_attribute).
+template <typename Class, typename Group, typename Field>
+void def_count(py::class_<Class>& c, const char* name, Group Class::*group, Field Group::*member,
+               const char* doc) {
+  c.def_property(
+      name, [group, member](const Class& s) { return s.*group.*member; },
+      [group, member, name](Class& s, const py::handle& v) {
+        s.*group.*member = static_cast<Field>(as_count(v, name));
+      },
+      doc);
+}
+
+template <typename Class, typename Group>
+void def_flag(py::class_<Class>& c, const char* name, Group Class::*group, bool Group::*member,
+              const char* doc) {
+  c.def_property(
+      name, [group, member](const Class& s) { return s.*group.*member; },
+      [group, member, name](Class& s, const py::handle& v) { s.*group.*member = as_bool(v, name); },
+      doc);
+}
+
+template <typename Class, typename Group>
+void def_real(py::class_<Class>& c, const char* name, Group Class::*group, double Group::*member,
+              const char* doc) {
+  c.def_property(
+      name, [group, member](const Class& s) { return s.*group.*member; },
+      [group, member](Class& s, double v) { s.*group.*member = v; }, doc);
+}
+
+template <typename Class, typename Group, typename Enum>
+void def_enum(py::class_<Class>& c, const char* name, Group Class::*group, Enum Group::*member,
+              const char* doc) {
+  c.def_property(
+      name, [group, member](const Class& s) { return s.*group.*member; },
+      [group, member, name](Class& s, const py::handle& v) {
+        s.*group.*member = enum_from_object<Enum>(v, name);
+      },
+      doc);
+}
+
+// voxel_size_m and downsample_to, the downsampling group both settings classes have
+// (settings.hpp), as flat attributes.
 template <typename Class>
 void def_voxel_grid(py::class_<Class>& c) {
   c.def_property(
-      "voxel_size_m", [](const Class& s) { return s.voxel_size_m; },
-      [](Class& s, const py::handle& v) { s.voxel_size_m = as_real(v, "voxel_size_m"); }, "");
-  c.def_property(
-      "downsample_to", [](const Class& s) { return s.downsample_to; },
+      "voxel_size_m", [](const Class& s) { return s.downsampling.voxel_size_m; },
       [](Class& s, const py::handle& v) {
-        s.downsample_to = static_cast<std::size_t>(as_count(v, "downsample_to"));
+        s.downsampling.voxel_size_m = as_real(v, "voxel_size_m");
       },
       "");
+  def_count(c, "downsample_to", &Class::downsampling, &DownsamplingSettings::downsample_to, "");
 }
 
 template <typename Class>
@@ -101,6 +141,17 @@ void def_distance(py::class_<Class>& c, const char* name, Distance Class::*membe
   c.def_property(
       name, [member](const Class& s) { return s.*member; },
       [member, name](Class& s, const py::handle& v) { s.*member = distance_from_object(v, name); },
+      doc);
+}
+
+template <typename Class, typename Group>
+void def_distance(py::class_<Class>& c, const char* name, Group Class::*group,
+                  Distance Group::*member, const char* doc) {
+  c.def_property(
+      name, [group, member](const Class& s) { return s.*group.*member; },
+      [group, member, name](Class& s, const py::handle& v) {
+        s.*group.*member = distance_from_object(v, name);
+      },
       doc);
 }
 
@@ -338,11 +389,14 @@ void bind_sgd_settings(py::module_& m) {
       .def(
           "validate", [](const SgdSettings& s) { s.validate(); },
           "Raises InvalidSettingsError (a ValueError) naming the first invalid setting.");
-  def_count(settings, "batch_size", &SgdSettings::batch_size, "");
-  def_flag(settings, "cap_batch_to_source", &SgdSettings::cap_batch_to_source, "");
+  // The groups sampling, pairing, scaling, evaluation and downsampling are flat attributes here,
+  // as they are flat keywords.
+  def_count(settings, "batch_size", &SgdSettings::sampling, &SamplingSettings::batch_size, "");
+  def_flag(settings, "cap_batch_to_source", &SgdSettings::sampling,
+           &SamplingSettings::cap_batch_to_source, "");
   def_flag(settings, "small_source_gauss_newton", &SgdSettings::small_source_gauss_newton, "");
-  def_distance(settings, "max_correspondence_distance", &SgdSettings::max_correspondence_distance,
-               "");
+  def_distance(settings, "max_correspondence_distance", &SgdSettings::pairing,
+               &PairingSettings::max_correspondence_distance, "");
   settings
       .def_readwrite("optimizer", &SgdSettings::optimizer,
                      "OptimizerSettings. Default Adam with learning rate 0.01.")
@@ -358,30 +412,23 @@ void bind_sgd_settings(py::module_& m) {
           [](SgdSettings& s, const py::handle& v) {
             s.coarse_cost = cost_from_object(v, "coarse_cost");
           },
-          "")
-      .def_property(
-          "kernel", [](const SgdSettings& s) { return s.kernel; },
-          [](SgdSettings& s, const py::handle& v) {
-            s.kernel = enum_from_object<KernelType>(v, "kernel");
-          },
-          "")
-      .def_property(
-          "scaling_origin", [](const SgdSettings& s) { return s.scaling_origin; },
-          [](SgdSettings& s, const py::handle& v) {
-            s.scaling_origin = enum_from_object<ScalingOrigin>(v, "scaling_origin");
-          },
           "");
-  def_distance(settings, "kernel_scale", &SgdSettings::kernel_scale, "");
-  settings.def_readwrite("trim_ratio", &SgdSettings::trim_ratio, "")
-      .def_readwrite("neighborhood", &SgdSettings::neighborhood,
-                     "NeighborhoodSettings for the normals and covariances of the plane costs.");
+  def_enum(settings, "kernel", &SgdSettings::pairing, &PairingSettings::kernel, "");
+  def_enum(settings, "scaling_origin", &SgdSettings::scaling, &ScalingSettings::origin, "");
+  def_distance(settings, "kernel_scale", &SgdSettings::pairing, &PairingSettings::kernel_scale, "");
+  def_real(settings, "trim_ratio", &SgdSettings::pairing, &PairingSettings::trim_ratio, "");
+  settings.def_readwrite(
+      "neighborhood", &SgdSettings::neighborhood,
+      "NeighborhoodSettings for the normals and covariances of the plane costs.");
   def_count(settings, "max_iterations", &SgdSettings::max_iterations, "");
-  def_count(settings, "seed", &SgdSettings::seed, "");
+  def_count(settings, "seed", &SgdSettings::sampling, &SamplingSettings::seed, "");
   def_flag(settings, "average_iterates", &SgdSettings::average_iterates, "");
-  def_count(settings, "evaluation_points", &SgdSettings::evaluation_points, "");
+  def_count(settings, "evaluation_points", &SgdSettings::evaluation,
+            &EvaluationSettings::evaluation_points, "");
   def_flag(settings, "record_trace", &SgdSettings::record_trace, "");
-  def_flag(settings, "check_degeneracy", &SgdSettings::check_degeneracy, "");
-  def_flag(settings, "robust_scaling", &SgdSettings::robust_scaling, "");
+  def_flag(settings, "check_degeneracy", &SgdSettings::evaluation,
+           &EvaluationSettings::check_degeneracy, "");
+  def_flag(settings, "robust_scaling", &SgdSettings::scaling, &ScalingSettings::robust, "");
   def_count(settings, "num_threads", &SgdSettings::num_threads, "");
   def_voxel_grid(settings);
   def_value_methods(settings);
@@ -435,24 +482,21 @@ void bind_batch_settings(py::module_& m) {
       .def_property(
           "cost", [](const BatchSettings& s) { return s.cost; },
           [](BatchSettings& s, const py::handle& v) { s.cost = cost_from_object(v, "cost"); }, "");
-  def_distance(batch, "max_correspondence_distance", &BatchSettings::max_correspondence_distance,
-               "");
-  batch.def_property(
-      "kernel", [](const BatchSettings& s) { return s.kernel; },
-      [](BatchSettings& s, const py::handle& v) {
-        s.kernel = enum_from_object<KernelType>(v, "kernel");
-      },
-      "");
-  def_distance(batch, "kernel_scale", &BatchSettings::kernel_scale, "");
-  batch.def_readwrite("trim_ratio", &BatchSettings::trim_ratio, "");
+  def_distance(batch, "max_correspondence_distance", &BatchSettings::pairing,
+               &PairingSettings::max_correspondence_distance, "");
+  def_enum(batch, "kernel", &BatchSettings::pairing, &PairingSettings::kernel, "");
+  def_distance(batch, "kernel_scale", &BatchSettings::pairing, &PairingSettings::kernel_scale, "");
+  def_real(batch, "trim_ratio", &BatchSettings::pairing, &PairingSettings::trim_ratio, "");
   def_count(batch, "max_iterations", &BatchSettings::max_iterations, "");
   batch.def_readwrite("translation_tolerance", &BatchSettings::translation_tolerance, "")
       .def_readwrite("rotation_tolerance", &BatchSettings::rotation_tolerance, "")
       .def_readwrite("initial_damping", &BatchSettings::initial_damping, "")
       .def_readwrite("neighborhood", &BatchSettings::neighborhood,
                      "NeighborhoodSettings for the normals and covariances of the plane costs.");
-  def_count(batch, "evaluation_points", &BatchSettings::evaluation_points, "");
-  def_flag(batch, "check_degeneracy", &BatchSettings::check_degeneracy, "");
+  def_count(batch, "evaluation_points", &BatchSettings::evaluation,
+            &EvaluationSettings::evaluation_points, "");
+  def_flag(batch, "check_degeneracy", &BatchSettings::evaluation,
+           &EvaluationSettings::check_degeneracy, "");
   def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling, "");
   def_count(batch, "num_threads", &BatchSettings::num_threads, "");
   def_voxel_grid(batch);

@@ -24,7 +24,19 @@ std::string python_literal(const py::object& value) {
 
 namespace {
 
-// The Python class holding a setting's attribute, by the part of its C++ member before the dot.
+// The Python path of a setting's C++ member: the groups sampling, pairing, scaling, evaluation and
+// downsampling are flat attributes of the settings class (settings.cpp), under the member's own
+// name except for the scaling's two; the other groups are nested classes (optimizer.type).
+std::string python_path(std::string_view field) {
+  if (field == "scaling.origin") return "scaling_origin";
+  if (field == "scaling.robust") return "robust_scaling";
+  for (const std::string_view group : {"sampling.", "pairing.", "evaluation.", "downsampling."}) {
+    if (field.starts_with(group)) return std::string(field.substr(group.size()));
+  }
+  return std::string(field);
+}
+
+// The Python class holding a setting's attribute, by the part of its Python path before the dot.
 std::string class_of(std::string_view field, std::string_view top) {
   const auto dot = field.find('.');
   if (dot == std::string_view::npos) return std::string(top);
@@ -40,7 +52,8 @@ std::string class_of(std::string_view field, std::string_view top) {
 template <typename S>
 py::object value_of(const Setting<S>& s, const py::object& defaults) {
   py::object value = defaults;
-  std::string_view rest = s.field;
+  const std::string path = python_path(s.field);
+  std::string_view rest = path;
   for (auto dot = rest.find('.'); dot != std::string_view::npos; dot = rest.find('.')) {
     value = value.attr(std::string(rest.substr(0, dot)).c_str());
     rest = rest.substr(dot + 1);
@@ -83,10 +96,10 @@ void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, c
   const py::object defaults = m.attr(top)();
   const py::object property = py::module_::import("builtins").attr("property");
   for (const auto& s : table) {
-    const std::string cls_name = class_of(s.field, top);
+    const std::string field = python_path(s.field);
+    const std::string cls_name = class_of(field, top);
     if (cls_name != top && std::string_view(top) == "BatchSettings") continue;  // nested: SGD's
     const py::object cls = m.attr(cls_name.c_str());
-    const std::string field(s.field);
     const std::string attribute =
         field.substr(field.find('.') == std::string::npos ? 0 : field.find('.') + 1);
     const py::object old = cls.attr("__dict__")[attribute.c_str()];

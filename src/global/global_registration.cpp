@@ -249,7 +249,7 @@ RegistrationResult align_global(const PointCloud& source, const ReferenceIndex& 
                                 const SgdSettings& settings, const GlobalSettings& global) {
   settings.validate();
   const detail::Stopwatch clock;
-  EstimateOnGrid found = estimate_on_grid(source, reference, global, settings.seed);
+  EstimateOnGrid found = estimate_on_grid(source, reference, global, settings.sampling.seed);
   GlobalEstimate& e = found.estimate;
   RegistrationResult r;
   r.message = e.message;

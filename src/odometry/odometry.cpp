@@ -57,9 +57,9 @@ void cap_step(SgdSettings& s, const ReferenceIndex& map) {
   const BoundingBox& box = map.bounding_box();
   const double scale_m = (box.max - box.min).maxCoeff();
   if (!(scale_m > 0.0)) return;
-  const double d_max = s.max_correspondence_distance.unit == Distance::Unit::metres
-                           ? s.max_correspondence_distance.value / scale_m
-                           : s.max_correspondence_distance.value;
+  const double d_max = s.pairing.max_correspondence_distance.unit == Distance::Unit::metres
+                           ? s.pairing.max_correspondence_distance.value / scale_m
+                           : s.pairing.max_correspondence_distance.value;
   s.optimizer.learning_rate = std::min(s.optimizer.learning_rate, 0.25 * d_max);
 }
 
@@ -171,8 +171,8 @@ Odometry::Odometry(const OdometrySettings& settings, std::string_view method,
   }
   // The pipeline thins frames and map on its own voxel grid (settings_.voxel_size_m): the
   // registration step uses them as they are.
-  sgd_.voxel_size_m = batch_.voxel_size_m = 0.0;
-  sgd_.downsample_to = batch_.downsample_to = 0;
+  sgd_.downsampling.voxel_size_m = batch_.downsampling.voxel_size_m = 0.0;
+  sgd_.downsampling.downsample_to = batch_.downsampling.downsample_to = 0;
   sgd_.validate();
   batch_.validate();
 }
@@ -274,20 +274,22 @@ RegistrationResult Odometry::align_to_map(const PointCloud& source, const Refere
     // features propose, the same registration refines (docs/global.md).
     SgdSettings s = method_->solver == Solver::sgd ? sgd_ : SgdSettings{};
     if (method_->solver != Solver::sgd) s.cost = batch_.cost;
-    s.max_correspondence_distance = SgdSettings{}.max_correspondence_distance;
-    s.voxel_size_m = 0.0;
-    s.downsample_to = 0;
+    s.pairing.max_correspondence_distance = SgdSettings{}.pairing.max_correspondence_distance;
+    s.downsampling.voxel_size_m = 0.0;
+    s.downsampling.downsample_to = 0;
     return start == FrameStart::global ? align_global(source, index, s)
                                        : align(source, index, s, T_guess);
   }
   if (method_->solver == Solver::sgd) {
     SgdSettings s = sgd_;
-    if (settings_.adaptive_threshold) s.max_correspondence_distance = Distance::metres(3 * sigma_m);
+    if (settings_.adaptive_threshold)
+      s.pairing.max_correspondence_distance = Distance::metres(3 * sigma_m);
     if (settings_.step_within_threshold) cap_step(s, index);
     return align(source, index, s, T_guess);
   }
   BatchSettings b = batch_;
-  if (settings_.adaptive_threshold) b.max_correspondence_distance = Distance::metres(3 * sigma_m);
+  if (settings_.adaptive_threshold)
+    b.pairing.max_correspondence_distance = Distance::metres(3 * sigma_m);
   return align_batch(source, index, b, T_guess);
 }
 

@@ -107,9 +107,9 @@ Eigen::Matrix4d increment_of(const PoseVector& step) {
 class GaussNewtonSystem {
  public:
   GaussNewtonSystem(const std::vector<BatchPair>& pairs, const PointCloud& source,
-                    const PointCloud& reference, const Eigen::Matrix4d& T,
-                    const BatchSettings& settings, double kernel_scale_m)
-      : settings_(settings), kernel_scale_m_(kernel_scale_m) {
+                    const PointCloud& reference, const Eigen::Matrix4d& T, CostType cost,
+                    KernelType kernel, double kernel_scale_m)
+      : kernel_(kernel), kernel_scale_m_(kernel_scale_m) {
     const Eigen::Matrix3d rotation = T.topLeftCorner<3, 3>();
     const Eigen::Vector3d translation = T.topRightCorner<3, 1>();
     terms_.reserve(pairs.size());
@@ -118,7 +118,7 @@ class GaussNewtonSystem {
           rotation * source.points[p.source_index].cast<double>() + translation;
       const Eigen::Vector3d r = reference.points[p.reference_index].cast<double>();
       const Eigen::Matrix3d omega = information_matrix(
-          settings.cost,
+          cost,
           reference.has_normals() ? reference.normals[p.reference_index] : Eigen::Vector3f::Zero(),
           reference.has_covariances() ? reference.covariances[p.reference_index]
                                       : Eigen::Matrix3f::Identity(),
@@ -146,7 +146,7 @@ class GaussNewtonSystem {
     for (const auto& term : terms_) {
       const Eigen::Vector3d e =
           delta.topLeftCorner<3, 3>() * term.q + delta.topRightCorner<3, 1>() - term.r;
-      c += kernel_rho(settings_.kernel, e.dot(term.omega * e), kernel_scale_m_);
+      c += kernel_rho(kernel_, e.dot(term.omega * e), kernel_scale_m_);
     }
     return c;
   }
@@ -155,13 +155,13 @@ class GaussNewtonSystem {
   void add(const Eigen::Vector3d& q, const Eigen::Vector3d& r, const Eigen::Matrix3d& omega) {
     const Eigen::Vector3d e = q - r;
     const double s = e.dot(omega * e);
-    const double w = kernel_weight(settings_.kernel, s, kernel_scale_m_);
+    const double w = kernel_weight(kernel_, s, kernel_scale_m_);
     PoseJacobianMatrix j;
     j.leftCols<3>() = -skew(q);
     j.rightCols<3>().setIdentity();
     h_.noalias() += w * j.transpose() * omega * j;
     b_.noalias() += w * j.transpose() * (omega * e);
-    cost_ += kernel_rho(settings_.kernel, s, kernel_scale_m_);
+    cost_ += kernel_rho(kernel_, s, kernel_scale_m_);
     terms_.push_back({q, r, omega});
   }
 
@@ -169,7 +169,7 @@ class GaussNewtonSystem {
     Eigen::Vector3d q, r;
     Eigen::Matrix3d omega;
   };
-  const BatchSettings& settings_;
+  KernelType kernel_;
   double kernel_scale_m_;
   std::vector<Term> terms_;
   PoseMatrix h_ = PoseMatrix::Zero();
@@ -197,9 +197,9 @@ class BatchRun {
         reference_(reference),
         settings_(settings),
         scale_m_(scale_m),
-        d_max_m_(settings.max_correspondence_distance.to_scaled(scale_m) * scale_m),
-        kernel_scale_m_(settings.kernel_scale.to_scaled(scale_m) * scale_m),
-        pairing_(source, reference, d_max_m_, settings.trim_ratio),
+        d_max_m_(settings.pairing.max_correspondence_distance.to_scaled(scale_m) * scale_m),
+        kernel_scale_m_(settings.pairing.kernel_scale.to_scaled(scale_m) * scale_m),
+        pairing_(source, reference, d_max_m_, settings.pairing.trim_ratio),
         damping_(settings.initial_damping) {}
 
   [[nodiscard]] double max_distance_m() const noexcept { return d_max_m_; }
@@ -242,7 +242,8 @@ class BatchRun {
     for (const auto& p : pairs) {
       moved_.push_back(rotation * source_.points[p.source_index].cast<double>() + translation);
       target_.push_back(ref.points[p.reference_index].cast<double>());
-      weights_.push_back(kernel_weight(settings_.kernel, p.squared_distance, kernel_scale_m_));
+      weights_.push_back(
+          kernel_weight(settings_.pairing.kernel, p.squared_distance, kernel_scale_m_));
     }
     BatchStep step;
     step.informative =
@@ -256,8 +257,8 @@ class BatchRun {
   // One Levenberg-Marquardt step (levenberg_marquardt.hpp).
   BatchStep levenberg_marquardt_step(const std::vector<BatchPair>& pairs,
                                      const Eigen::Matrix4d& T) {
-    const GaussNewtonSystem system(pairs, source_, reference_.cloud(), T, settings_,
-                                   kernel_scale_m_);
+    const GaussNewtonSystem system(pairs, source_, reference_.cloud(), T, settings_.cost,
+                                   settings_.pairing.kernel, kernel_scale_m_);
     BatchStep result;
     result.informative = system.informative();
     if (!result.informative) return result;
@@ -326,24 +327,23 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::eager);
   const detail::PairFrame frame(reference);
-  const double voxel_m = detail::source_voxel_size(reference, settings.voxel_size_m);
+  const double voxel_m = detail::source_voxel_size(reference, settings.downsampling);
   const detail::PreparedSource src(source, voxel_m, settings.num_threads, frame.origin_m(),
                                    settings.cost, settings.neighborhood, BatchPairing::kMinPairs,
                                    "the minimum of");
   RegistrationResult result;
   detail::record_clouds(result, src.cloud(), voxel_m, reference);
-  const double scale_m = detail::scaling_of(src.cloud(), reference, ScalingOrigin::lower_corner,
-                                            settings.robust_scaling, result)
-                             .scale();
+  const double scale_m =
+      detail::scaling_of(src.cloud(), reference,
+                         {.origin = ScalingOrigin::lower_corner, .robust = settings.robust_scaling},
+                         result)
+          .scale();
   result.scale_m = scale_m;
   BatchRun run(src.cloud(), reference, settings, scale_m);
   result.T_reference_source =
       orthonormalized(run.minimise(frame.to_stored(orthonormalized(T_init)), result));
   detail::conclude(result, src.cloud(), reference, run.max_distance_m(),
-                   EvaluationSettings{.evaluation_points = settings.evaluation_points,
-                                      .check_degeneracy = settings.check_degeneracy,
-                                      .num_threads = settings.num_threads},
-                   clock);
+                   detail::evaluation_of(settings), clock);
   frame.to_clouds(result);
   return result;
 }

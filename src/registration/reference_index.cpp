@@ -110,9 +110,11 @@ ReferenceIndex with_block_surfaces(const VoxelTable<Moments>& table, PointCloud 
 
 }  // namespace
 
-ReferenceIndex registration_index(PointCloud cloud, double voxel_size_m, std::size_t downsample_to,
+ReferenceIndex registration_index(PointCloud cloud, const DownsamplingSettings& downsampling,
                                   const NeighborhoodSettings& settings, bool surfaces,
                                   const KdTreeSettings& tree) {
+  double voxel_size_m = downsampling.voxel_size_m;
+  const std::size_t downsample_to = downsampling.downsample_to;
   const bool grid_from_data = voxel_size_m == 0.0 && downsample_to > 0;
   std::optional<VoxelTable<Counted>> settled;
   voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, settings.num_threads, &settled);

@@ -4,11 +4,12 @@
 
 #include "sgdicp/core/point_cloud.hpp"
 #include "sgdicp/index/nearest_neighbor.hpp"
+#include "sgdicp/registration/settings.hpp"
 #include "sgdicp/surfaces/normals.hpp"
 
 namespace sgdicp::detail {
 
-/// The index over the reference of a registration: on the grid of
+/// The index over the reference of a registration: on the grid of the downsampling settings,
 /// registration_voxel_size(cloud, voxel_size_m, downsample_to) (the search's last counting pass
 /// doubles as the thinning's), or over the cloud as given when that is 0. On a grid: the
 /// centroids (voxel_downsample) and, when `surfaces` and the cloud holds at least k/9 points per
@@ -16,8 +17,8 @@ namespace sgdicp::detail {
 /// normal and covariance from the points of its 3x3x3 block (voxel_downsample_with_surfaces);
 /// otherwise the centroids alone, whose surfaces come from their k nearest centroids
 /// (PointSurfaces). `tree`: the KD-tree's settings (its voxel_size_m must be 0).
-[[nodiscard]] ReferenceIndex registration_index(PointCloud cloud, double voxel_size_m,
-                                                std::size_t downsample_to,
+[[nodiscard]] ReferenceIndex registration_index(PointCloud cloud,
+                                                const DownsamplingSettings& downsampling,
                                                 const NeighborhoodSettings& settings, bool surfaces,
                                                 const KdTreeSettings& tree);
 

@@ -39,22 +39,23 @@ struct Pair {
 // Algorithm 1, lines 3-8: each point of a mini-batch moved by the current pose, paired with its
 // nearest reference point within d_max, added to the mini-batch cost. The tree lives in metres,
 // the pose in the scaled space. The normals and covariances a cost needs come from the clouds or
-// are estimated for the pairs that use them (point_surfaces.hpp).
+// are estimated for the pairs that use them (point_surfaces.hpp). It reads the pairing group,
+// the surfaces' neighbourhoods and the run's thread count; the run says which cost (use_cost).
 class MiniBatchPairing {
  public:
   MiniBatchPairing(const PointCloud& source, const ReferenceIndex* source_index,
                    const ReferenceIndex& reference, const UnitCubeScaling& scaling,
-                   const SgdSettings& settings)
+                   const PairingSettings& settings, const NeighborhoodSettings& neighborhood,
+                   std::size_t num_threads, std::size_t batch_size)
       : source_(source),
         reference_(reference),
-        reference_surfaces_(reference, settings.neighborhood),
-        source_surfaces_(source, source_index, settings.neighborhood),
+        reference_surfaces_(reference, neighborhood),
+        source_surfaces_(source, source_index, neighborhood),
         scaling_(scaling),
         settings_(settings),
         kernel_scale_(settings.kernel_scale.to_scaled(scaling.scale())) {
-    pairs_.reserve(settings.batch_size);
-    use_cost(settings.cost);
-    split_queries_ = resolve_thread_count(settings.num_threads) >= 2;
+    pairs_.reserve(batch_size);
+    split_queries_ = resolve_thread_count(num_threads) >= 2;
   }
 
   [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
@@ -234,7 +235,7 @@ class MiniBatchPairing {
   detail::PointSurfaces reference_surfaces_;
   detail::PointSurfaces source_surfaces_;
   const UnitCubeScaling& scaling_;
-  const SgdSettings& settings_;
+  const PairingSettings& settings_;
   double kernel_scale_;  // scaled
   CostType cost_ = CostType::point_to_point;
   bool plain_ = false;
@@ -257,31 +258,33 @@ class SgdRun {
       : settings_(settings),
         scaling_(scaling),
         reference_(reference),
-        pairing_(source, source_index, reference, scaling, settings),
-        sampler_(static_cast<std::uint32_t>(source.size()), settings.seed),
+        pairing_(source, source_index, reference, scaling, settings.pairing, settings.neighborhood,
+                 settings.num_threads, settings.sampling.batch_size),
+        sampler_(static_cast<std::uint32_t>(source.size()), settings.sampling.seed),
         optimizer_(settings.optimizer),
         // Batches are the same set every time only when m is a multiple of N: beyond N a batch
         // also draws part of the next epoch at random (EpochSampler).
-        monitor_(settings.convergence, settings.batch_size % source.size() == 0),
+        monitor_(settings.convergence, settings.sampling.batch_size % source.size() == 0),
         schedule_(settings.refinement,
-                  settings.max_correspondence_distance.to_scaled(scaling.scale()),
+                  settings.pairing.max_correspondence_distance.to_scaled(scaling.scale()),
                   settings.refinement.min_distance.to_scaled(scaling.scale()),
-                  settings.batch_size * settings.convergence.window) {
-    batch_.reserve(settings.batch_size);
+                  settings.sampling.batch_size * settings.convergence.window) {
+    batch_.reserve(settings.sampling.batch_size);
     // The coarse stage pairs with its own cost when refinement stages follow, and with one
     // point per voxel of a map that keeps several (an odometry map): it only has to bring the
     // pose into the refinement's basin, and its wide d_max makes each search in the full map
     // visit thousands of points (docs/design.md, *Coarse view of the map*).
-    if (settings.refinement.stages > 0) {
-      pairing_.use_cost(settings.coarse_cost);
-      if (const ReferenceIndex* coarse = reference.coarse_view()) pairing_.search_in(*coarse);
+    pairing_.use_cost(settings.refinement.stages > 0 ? settings.coarse_cost : settings.cost);
+    if (const ReferenceIndex* coarse = reference.coarse_view();
+        coarse != nullptr && settings.refinement.stages > 0) {
+      pairing_.search_in(*coarse);
     }
   }
 
   // Runs from theta until converged, stopped or out of iterations (the reason goes into
   // result); returns the pose to report, in the scaled space.
   PoseVector minimise(PoseVector theta, RegistrationResult& result) {
-    const std::size_t m = settings_.batch_size;
+    const std::size_t m = settings_.sampling.batch_size;
     for (std::size_t it = 0; it < settings_.max_iterations; ++it) {
       sampler_.next_batch(m, batch_);  // line 2
       const EulerPoseJacobian pose(theta);
@@ -327,7 +330,8 @@ class SgdRun {
   void begin_refinement() {
     pairing_.use_cost(settings_.cost);
     pairing_.search_in(reference_);
-    const bool robust = settings_.kernel != KernelType::none || settings_.trim_ratio < 1.0;
+    const bool robust =
+        settings_.pairing.kernel != KernelType::none || settings_.pairing.trim_ratio < 1.0;
     if (!settings_.refinement.gauss_newton || robust ||
         optimizer_.settings().type == OptimizerType::gauss_newton) {
       return;
@@ -355,7 +359,7 @@ class SgdRun {
                             scaling_.to_metric(transform_from_pose(theta)),
                             optimizer_.settings().learning_rate * schedule_.step_scale(),
                             schedule_.max_distance() * scaling_.scale(), cost.pairs(),
-                            cost.cost(settings_.batch_size)});
+                            cost.cost(settings_.sampling.batch_size)});
   }
 
   // The guards: a pose that blew up, or a whole window of mini-batches without a pair.
@@ -399,7 +403,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::lazy);
   const detail::PairFrame frame(reference);
-  const double voxel_m = detail::source_voxel_size(reference, settings.voxel_size_m);
+  const double voxel_m = detail::source_voxel_size(reference, settings.downsampling);
   // The source covariances are set up if either stage's cost needs them.
   const CostType source_needs =
       settings.refinement.stages > 0 && needs_covariances(settings.coarse_cost)
@@ -408,16 +412,16 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   const detail::PreparedSource src(
       source, voxel_m, settings.num_threads, frame.origin_m(), source_needs, settings.neighborhood,
       min_source_points(settings),
-      settings.cap_batch_to_source ? "the smallest mini-batch" : "the mini-batch size",
+      settings.sampling.cap_batch_to_source ? "the smallest mini-batch" : "the mini-batch size",
       detail::SurfaceEstimation::lazy);
   // The run's own copy: m capped and Gauss-Newton steps for a small source.
   SgdSettings run_settings = settings;
-  run_settings.batch_size = batch_size_for(settings, src.cloud().size());
+  run_settings.sampling.batch_size = batch_size_for(settings, src.cloud().size());
   run_settings.optimizer = optimizer_for(settings, src.cloud().size());
   RegistrationResult result;
   detail::record_clouds(result, src.cloud(), voxel_m, reference);
-  const UnitCubeScaling scaling = detail::scaling_of(
-      src.cloud(), reference, settings.scaling_origin, settings.robust_scaling, result);
+  const UnitCubeScaling scaling =
+      detail::scaling_of(src.cloud(), reference, settings.scaling, result);
   result.scale_m = scaling.scale();
   SgdRun run(src.cloud(), src.index(), reference, run_settings, scaling);
   // Matrices read from text carry few digits: project onto the nearest rotation.
@@ -441,19 +445,17 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
         run.max_distance(),
         scaling.scale(),
         settings.cost,
-        run_settings.batch_size,
-        settings.seed,
+        run_settings.sampling.batch_size,
+        settings.sampling.seed,
         theta_init,
-        settings.trim_ratio >= 1.0};
+        settings.pairing.trim_ratio >= 1.0};
     theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);
   }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   // The degeneracy check reads the reference normals the run estimated (or would have).
   detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
-                   EvaluationSettings{.evaluation_points = settings.evaluation_points,
-                                      .check_degeneracy = settings.check_degeneracy,
-                                      .num_threads = settings.num_threads},
-                   clock, [&run](std::uint32_t i) { return run.reference_normal(i); });
+                   detail::evaluation_of(settings), clock,
+                   [&run](std::uint32_t i) { return run.reference_normal(i); });
   frame.to_clouds(result);
   return result;
 }

@@ -15,22 +15,22 @@ namespace sgdicp {
 
 SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   SgdSettings s;
-  s.batch_size = 160;
-  s.cap_batch_to_source = false;
+  s.sampling.batch_size = 160;
+  s.sampling.cap_batch_to_source = false;
   s.small_source_gauss_newton = false;
-  s.max_correspondence_distance = Distance::scaled(0.5);
+  s.pairing.max_correspondence_distance = Distance::scaled(0.5);
   s.optimizer.type = optimizer;
   // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
   // divides by the gradient's RMS), so alpha = 2 would jump twice across the unit cube; we use
   // the original implementation's Adam step 0.1 scaled down by the measured factor
   // (docs/design.md). Both come from the one table of step sizes.
   s.optimizer.learning_rate = default_learning_rate(optimizer, s.optimizer.momentum);
-  s.scaling_origin = ScalingOrigin::lower_corner;
-  s.robust_scaling = false;
+  s.scaling.origin = ScalingOrigin::lower_corner;
+  s.scaling.robust = false;
   s.refinement.stages = 0;
   s.average_iterates = false;
   s.cost = s.coarse_cost = CostType::point_to_point;
-  s.downsample_to = 0;
+  s.downsampling.downsample_to = 0;
   return s;
 }
 
@@ -41,16 +41,16 @@ std::size_t window_of(const SgdSettings& settings) {
 }  // namespace
 
 bool is_small_source(const SgdSettings& settings, std::size_t source_points) {
-  return 2 * source_points < settings.batch_size * window_of(settings);
+  return 2 * source_points < settings.sampling.batch_size * window_of(settings);
 }
 
 std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_points) {
-  if (!settings.cap_batch_to_source || !is_small_source(settings, source_points)) {
-    return settings.batch_size;
+  if (!settings.sampling.cap_batch_to_source || !is_small_source(settings, source_points)) {
+    return settings.sampling.batch_size;
   }
   const std::size_t window = window_of(settings);
   const std::size_t twice_per_window = (2 * source_points + window - 1) / window;
-  return std::min(settings.batch_size, std::max(kMinCappedBatch, twice_per_window));
+  return std::min(settings.sampling.batch_size, std::max(kMinCappedBatch, twice_per_window));
 }
 
 OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_points) {
@@ -65,8 +65,9 @@ OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_
 }
 
 std::size_t min_source_points(const SgdSettings& settings) {
-  return settings.cap_batch_to_source ? std::min(settings.batch_size, kMinCappedBatch)
-                                      : settings.batch_size;
+  return settings.sampling.cap_batch_to_source
+             ? std::min(settings.sampling.batch_size, kMinCappedBatch)
+             : settings.sampling.batch_size;
 }
 
 BatchSettings BatchSettings::icp() {
@@ -168,7 +169,8 @@ void check_table(const T& settings, const std::vector<Setting<T>>& table, Settin
 void SgdSettings::validate(SettingNames names) const {
   check_table(*this, sgd_settings_table(), names);
   neighborhood.validate();  // epsilon and the viewpoint are not in the table
-  const double pairs = static_cast<double>(batch_size) * static_cast<double>(convergence.window);
+  const double pairs =
+      static_cast<double>(sampling.batch_size) * static_cast<double>(convergence.window);
   if (pairs > kMaxWindowPairs) {
     const auto* b = find_sgd_setting("batch-size");
     const auto* w = find_sgd_setting("window");

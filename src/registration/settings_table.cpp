@@ -114,6 +114,11 @@ using C = ConvergenceSettings;
 using R = RefinementSettings;
 using N = NeighborhoodSettings;
 using U = UncertaintySettings;
+using SA = SamplingSettings;
+using P = PairingSettings;
+using SC = ScalingSettings;
+using E = EvaluationSettings;
+using D = DownsamplingSettings;
 
 // Ranges (docs/registration.md explains each): wide enough for every real use, from a 15 cm
 // scan to a km-scale map, narrow enough that no value crashes, allocates absurdly or returns the
@@ -221,14 +226,14 @@ std::vector<Setting<S>> step_settings() {
           {"learning-rate", "optimizer.learning_rate", kLearningRate, "scaled units",
            "Step size alpha (adaptive rules: a length per step; sgd, momentum: a gradient "
            "multiplier; gauss-newton: a fraction of the Newton step)"}),
-      setting<S, &S::batch_size>({"batch-size",
-                                  "batch_size",
-                                  {1.0, 1e7},
-                                  "",
-                                  "Mini-batch size m, source points per iteration"}),
-      setting<S, &S::cap_batch_to_source>(
+      setting<S, &S::sampling, &SA::batch_size>({"batch-size",
+                                                 "sampling.batch_size",
+                                                 {1.0, 1e7},
+                                                 "",
+                                                 "Mini-batch size m, source points per iteration"}),
+      setting<S, &S::sampling, &SA::cap_batch_to_source>(
           {"cap-batch-to-source",
-           "cap_batch_to_source",
+           "sampling.cap_batch_to_source",
            {},
            "",
            "Small sources: cap m at 2 x source points / window (at least 32) so that a "
@@ -241,16 +246,18 @@ std::vector<Setting<S>> step_settings() {
            "Small sources (fewer than batch-size x window / 2 points): the coarse stage takes "
            "Gauss-Newton steps while the optimizer is the default Adam (false: the optimizer "
            "always, the paper)"}),
-      setting<S, &S::max_correspondence_distance>(
-          {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
+      setting<S, &S::pairing, &P::max_correspondence_distance>(
+          {"max-distance", "pairing.max_correspondence_distance", kScaledRange, "",
+           kMaxDistanceHelp}),
       setting<S, &S::max_iterations>(
           {"max-iterations", "max_iterations", kIterations, "",
            "Iteration limit (mini-batches); reaching it reports 'not converged'"}),
-      setting<S, &S::seed>({"seed",
-                            "seed",
-                            {0.0, kUint64Max},
-                            "",
-                            "Seed of the mini-batch sampler (same seed, same result)"}),
+      setting<S, &S::sampling, &SA::seed>(
+          {"seed",
+           "sampling.seed",
+           {0.0, kUint64Max},
+           "",
+           "Seed of the mini-batch sampler (same seed, same result)"}),
       setting<S, &S::optimizer, &O::momentum>(
           {"momentum", "optimizer.momentum", kDecay, "", "Momentum: velocity decay"}),
       setting<S, &S::optimizer, &O::beta1>(
@@ -358,15 +365,16 @@ std::vector<Setting<S>> result_and_pair_settings() {
            "",
            "Return the mean of the window iterates of the final stage's stationary window "
            "(true) or the last iterate (false)"}),
-      setting<S, &S::scaling_origin>(
+      setting<S, &S::scaling, &SC::origin>(
           {"scaling-origin",
-           "scaling_origin",
+           "scaling.origin",
            {},
            "",
            "Origin of the scaled space and pivot of the rotation (lower-corner, also spelled "
            "corner: the paper, points in [0, 1]; center: points in [-0.5, 0.5])"}),
-      setting<S, &S::evaluation_points>(
-          {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
+      setting<S, &S::evaluation, &E::evaluation_points>({"evaluation-points",
+                                                         "evaluation.evaluation_points",
+                                                         kEvaluationPoints, "", kEvaluationHelp}),
       cost_setting(),
       setting<S, &S::coarse_cost>(
           {"coarse-cost",
@@ -376,24 +384,25 @@ std::vector<Setting<S>> result_and_pair_settings() {
            "Cost of the first (coarse) stage when refinement stages follow (the refinement "
            "stages and the result use the method's cost): point-to-point keeps the paper's wide "
            "basin"}),
-      setting<S, &S::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
-      setting<S, &S::kernel_scale>(
-          {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
-      setting<S, &S::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
+      setting<S, &S::pairing, &P::kernel>({"kernel", "pairing.kernel", {}, "", kKernelHelp}),
+      setting<S, &S::pairing, &P::kernel_scale>(
+          {"kernel-scale", "pairing.kernel_scale", kScaledRange, "", kKernelScaleHelp}),
+      setting<S, &S::pairing, &P::trim_ratio>({"trim", "pairing.trim_ratio", kTrim, "", kTrimHelp}),
       setting<S, &S::neighborhood, &N::k>(
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
       setting<S, &S::neighborhood, &N::flat_k>(
           {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
       setting<S, &S::neighborhood, &N::flatness>(
           {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
-      setting<S, &S::check_degeneracy>(
-          {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<S, &S::evaluation, &E::check_degeneracy>(
+          {"check-degeneracy", "evaluation.check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
-      setting<S, &S::voxel_size_m>({"voxel-size", "voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
-      setting<S, &S::downsample_to>(
-          {"downsample-to", "downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
-      setting<S, &S::robust_scaling>(
-          {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
+      setting<S, &S::downsampling, &D::voxel_size_m>(
+          {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      setting<S, &S::downsampling, &D::downsample_to>(
+          {"downsample-to", "downsampling.downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
+      setting<S, &S::scaling, &SC::robust>(
+          {"robust-scaling", "scaling.robust", {}, "", kRobustScalingHelp}),
       setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
   };
 }
@@ -470,8 +479,9 @@ std::vector<Setting<S>> make_sgd_table() {
 
 std::vector<Setting<B>> make_batch_table() {
   return {
-      setting<B, &B::max_correspondence_distance>(
-          {"max-distance", "max_correspondence_distance", kScaledRange, "", kMaxDistanceHelp}),
+      setting<B, &B::pairing, &P::max_correspondence_distance>(
+          {"max-distance", "pairing.max_correspondence_distance", kScaledRange, "",
+           kMaxDistanceHelp}),
       setting<B, &B::max_iterations>(
           {"max-iterations", "max_iterations", kIterations, "",
            "Iteration limit (passes over the source); reaching it reports 'not converged'"}),
@@ -485,25 +495,27 @@ std::vector<Setting<B>> make_batch_table() {
       setting<B, &B::rotation_tolerance>({"rotation-tolerance", "rotation_tolerance", kTolerance,
                                           "rad",
                                           "... and the rotation less than this (rotation angle)"}),
-      setting<B, &B::evaluation_points>(
-          {"evaluation-points", "evaluation_points", kEvaluationPoints, "", kEvaluationHelp}),
+      setting<B, &B::evaluation, &E::evaluation_points>({"evaluation-points",
+                                                         "evaluation.evaluation_points",
+                                                         kEvaluationPoints, "", kEvaluationHelp}),
       setting<B, &B::cost>({"cost", "cost", {}, "", kCostHelp, true}),
-      setting<B, &B::kernel>({"kernel", "kernel", {}, "", kKernelHelp}),
-      setting<B, &B::kernel_scale>(
-          {"kernel-scale", "kernel_scale", kScaledRange, "", kKernelScaleHelp}),
-      setting<B, &B::trim_ratio>({"trim", "trim_ratio", kTrim, "", kTrimHelp}),
+      setting<B, &B::pairing, &P::kernel>({"kernel", "pairing.kernel", {}, "", kKernelHelp}),
+      setting<B, &B::pairing, &P::kernel_scale>(
+          {"kernel-scale", "pairing.kernel_scale", kScaledRange, "", kKernelScaleHelp}),
+      setting<B, &B::pairing, &P::trim_ratio>({"trim", "pairing.trim_ratio", kTrim, "", kTrimHelp}),
       setting<B, &B::neighborhood, &N::k>(
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
       setting<B, &B::neighborhood, &N::flat_k>(
           {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
       setting<B, &B::neighborhood, &N::flatness>(
           {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
-      setting<B, &B::check_degeneracy>(
-          {"check-degeneracy", "check_degeneracy", {}, "", kDegeneracyHelp}),
+      setting<B, &B::evaluation, &E::check_degeneracy>(
+          {"check-degeneracy", "evaluation.check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
-      setting<B, &B::voxel_size_m>({"voxel-size", "voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
-      setting<B, &B::downsample_to>(
-          {"downsample-to", "downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
+      setting<B, &B::downsampling, &D::voxel_size_m>(
+          {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      setting<B, &B::downsampling, &D::downsample_to>(
+          {"downsample-to", "downsampling.downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
       setting<B, &B::robust_scaling>(
           {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),

@@ -17,6 +17,7 @@
 #include "sgdicp/points/scaling.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/registration/evaluation.hpp"
+#include "sgdicp/registration/settings.hpp"
 #include "sgdicp/surfaces/normals.hpp"
 #include "sgdicp/surfaces/prepare_reference.hpp"
 #include "surfaces/point_surfaces.hpp"
@@ -86,8 +87,9 @@ class PreparedSource {
 /// are on one grid. An index built from a cloud as given has none, and the source is then used
 /// as given too: centroids paired with raw points would bias the point-to-point cost (4.9 mm on
 /// a moved copy of the ETH map that both clouds at full resolution register to 1e-7 m).
-inline double source_voxel_size(const ReferenceIndex& reference, double voxel_size_m) {
-  return voxel_size_m > 0.0 ? voxel_size_m : reference.voxel_size_m();
+inline double source_voxel_size(const ReferenceIndex& reference,
+                                const DownsamplingSettings& downsampling) {
+  return downsampling.voxel_size_m > 0.0 ? downsampling.voxel_size_m : reference.voxel_size_m();
 }
 
 /// The frame a registration runs in: the reference's stored coordinates, measured from its
@@ -144,9 +146,10 @@ inline void check_within_float_range(const BoundingBox& box, const char* which) 
 /// every point or of the bulk of each cloud; the far points left out go into result.far_points.
 [[nodiscard]] inline UnitCubeScaling scaling_of(const PointCloud& source,
                                                 const ReferenceIndex& reference,
-                                                ScalingOrigin origin, bool robust,
+                                                const ScalingSettings& settings,
                                                 RegistrationResult& result) {
-  if (!robust) {
+  const ScalingOrigin origin = settings.origin;
+  if (!settings.robust) {
     const BoundingBox source_box = BoundingBox::of(source);
     check_within_float_range(source_box, "source");
     check_within_float_range(reference.bounding_box(), "reference");
@@ -172,6 +175,14 @@ inline void set_stop(RegistrationResult& result, StopReason reason, std::string 
   return "reached the iteration limit of " + std::to_string(max_iterations) + " before converging";
 }
 
+/// The final statistics' settings of a run: its evaluation group, on the run's threads.
+template <typename Settings>
+[[nodiscard]] EvaluationSettings evaluation_of(const Settings& settings) {
+  EvaluationSettings evaluation = settings.evaluation;
+  evaluation.num_threads = settings.num_threads;
+  return evaluation;
+}
+
 /// Fills the final statistics of result.T_reference_source and the time of the whole run.
 inline void conclude(RegistrationResult& result, const PointCloud& source,
                      const ReferenceIndex& reference, double max_distance_m,
@@ -190,8 +201,8 @@ template <typename Settings>
   NeighborhoodSettings neighborhood = settings.neighborhood;
   neighborhood.num_threads = settings.num_threads;
   const bool surfaces = needs_reference_normals(settings.cost) || needs_covariances(settings.cost);
-  return registration_index(std::move(reference), settings.voxel_size_m, settings.downsample_to,
-                            neighborhood, surfaces, tree);
+  return registration_index(std::move(reference), settings.downsampling, neighborhood, surfaces,
+                            tree);
 }
 
 /// The index of a reference given as a cloud (reference_index_for, the convenience overloads of

@@ -82,7 +82,7 @@ class SgdIcp {
 
   /// d_max in metres (the library's Distance::metres), as pcl::Registration's.
   void setMaxCorrespondenceDistance(double distance_m) {
-    settings_.max_correspondence_distance = Distance::metres(distance_m);
+    settings_.pairing.max_correspondence_distance = Distance::metres(distance_m);
   }
   /// Mini-batches at most (SgdSettings::max_iterations).
   void setMaximumIterations(int iterations) {

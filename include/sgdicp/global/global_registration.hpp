@@ -91,9 +91,9 @@ struct GlobalEstimate {
                                              const GlobalSettings& global = {},
                                              std::uint64_t seed = 2019);
 
-/// estimate_global (seeded with settings.seed), then align() from its winner with `settings`.
-/// The result carries the estimate in its global_* fields; global_reliable false means no
-/// reliable global solution (the transform is then the best guess, or the identity when there
+/// estimate_global (seeded with settings.sampling.seed), then align() from its winner with
+/// `settings`. The result carries the estimate in its global_* fields; global_reliable false means
+/// no reliable global solution (the transform is then the best guess, or the identity when there
 /// was none, and should not be used).
 [[nodiscard]] RegistrationResult align_global(const PointCloud& source,
                                               const ReferenceIndex& reference,

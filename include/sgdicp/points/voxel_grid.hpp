@@ -29,8 +29,8 @@ namespace sgdicp {
 /// or 0 when there is nothing to thin: target_points is 0, the cloud has at most that many
 /// points, they all lie in one place, or a point lies so far beyond the bulk (1e30 m) that no
 /// grid fine enough for the bulk can index it. How the registrations choose their grid from the
-/// data (SgdSettings::downsample_to, docs/preprocessing.md). Throws InvalidInputError for a
-/// non-finite point.
+/// data (SgdSettings::downsampling.downsample_to, docs/preprocessing.md). Throws InvalidInputError
+/// for a non-finite point.
 [[nodiscard]] double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points);
 
 /// The voxel grid a registration thins `cloud` with, metres (0 = none): voxel_size_m when

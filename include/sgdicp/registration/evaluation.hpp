@@ -39,6 +39,8 @@ struct EvaluationSettings {
   /// more (a registration passes its num_threads). The same values for any count: the sums are
   /// made in sample order on the calling thread.
   std::size_t num_threads = 1;
+
+  bool operator==(const EvaluationSettings&) const = default;
 };
 
 /// The unit normal of reference point i (or zero where the surface defines none).

@@ -11,9 +11,9 @@ namespace sgdicp {
 
 /// Registers source to the reference held by an index (built once, reusable, thread-safe).
 /// T_init is the initial T_reference_source. The source is first thinned on the voxel grid of
-/// the index (reference_index_for), or on settings.voxel_size_m when set; an index built from a
-/// cloud as given (ReferenceIndex's constructor) has none, and the source is then used as given
-/// too. The result says which grid (voxel_size_m). Throws InvalidInputError /
+/// the index (reference_index_for), or on settings.downsampling.voxel_size_m when set; an index
+/// built from a cloud as given (ReferenceIndex's constructor) has none, and the source is then used
+/// as given too. The result says which grid (voxel_size_m). Throws InvalidInputError /
 /// InvalidSettingsError.
 [[nodiscard]] RegistrationResult align(const PointCloud& source, const ReferenceIndex& reference,
                                        const SgdSettings& settings = {},

@@ -18,6 +18,7 @@
 #include "sgdicp/costs/cost.hpp"
 #include "sgdicp/costs/robust_kernel.hpp"
 #include "sgdicp/points/scaling.hpp"
+#include "sgdicp/registration/evaluation.hpp"
 #include "sgdicp/solver/convergence.hpp"
 #include "sgdicp/solver/optimizer.hpp"
 #include "sgdicp/solver/refinement.hpp"
@@ -30,7 +31,9 @@ namespace sgdicp {
 /// option (--window) or the Python keyword (window=).
 enum class SettingNames { field, cli, python };
 
-struct SgdSettings {
+/// The mini-batches (read by the run's sampler and batch loop, and by batch_size_for,
+/// is_small_source and min_source_points): how many source points each draws, and from which seed.
+struct SamplingSettings {
   /// m of the paper: source points per mini-batch.
   std::size_t batch_size = 160;
   /// Small sources: m at most 2 x source points / window (at least kMinCappedBatch), so that one
@@ -40,18 +43,81 @@ struct SgdSettings {
   /// 17.7 ms). Sources of at least batch_size x window / 2 points (1,600 by default) keep
   /// m; false keeps it always (the paper).
   bool cap_batch_to_source = true;
+  /// Seed of the mini-batch sampler; same inputs and seed give the same result.
+  std::uint64_t seed = 2019;
+
+  bool operator==(const SamplingSettings&) const = default;
+};
+
+/// Which pairs count and how much (read by the pairing of either solver): d_max, the robust
+/// kernel and the trimming. The defaults are SGD's; BatchSettings has its own d_max.
+struct PairingSettings {
+  /// d_max: pairs farther apart are rejected (SGD: the paper's 0.5 in scaled units).
+  Distance max_correspondence_distance = Distance::scaled(0.5);
+  /// Robust kernel on each pair's residual (robust_kernel.hpp) ...
+  KernelType kernel = KernelType::none;
+  /// ... and its scale: the residual size where it starts to down-weight.
+  Distance kernel_scale = Distance::scaled(0.01);
+  /// Keep only this fraction of the pairs (SGD: of each mini-batch's; batch methods: of each
+  /// iteration's), the closest ones (trimmed ICP, Chetverikov et al. 2002), for partial overlap;
+  /// 1 keeps all.
+  double trim_ratio = 1.0;
+
+  bool operator==(const PairingSettings&) const = default;
+};
+
+/// The scaled space of an SGD run (read by its scaling, UnitCubeScaling).
+struct ScalingSettings {
+  /// Origin of the scaled space = pivot of roll, pitch, yaw. The paper's lower corner couples
+  /// rotation and translation strongly (a small rotation about a far corner is a large
+  /// translation of the points); the box centre decouples them (docs/design.md).
+  ScalingOrigin origin = ScalingOrigin::center;
+  /// Scale from the bulk of each cloud (bulk_bounding_box in scaling.hpp), so that a few far
+  /// points (spurious returns) do not shrink the scene; false = the paper's bounding box of
+  /// every point. The far points left out are counted in RegistrationResult::far_points.
+  bool robust = true;
+
+  bool operator==(const ScalingSettings&) const = default;
+};
+
+/// Voxel-grid downsampling of both clouds before registering (read where the reference's index
+/// is built, reference_index_for, and where the source is thinned, align()). The default is
+/// SGD's; BatchSettings downsamples only when asked.
+struct DownsamplingSettings {
+  /// The voxel side, metres (points/voxel_grid.hpp); 0 = the grid downsample_to chooses.
+  double voxel_size_m = 0.0;
+  /// Without voxel_size_m: the grid that keeps about this many points of the reference
+  /// (voxel_size_for_count), applied to both clouds where the library builds the reference's
+  /// index (reference_index_for, align() on two clouds, the CLI, Python arrays); 0 = none. An
+  /// index built from a cloud as given keeps both clouds as given. One voxel grid evens out the
+  /// density of near and far returns and indexes ~20k points instead of 100k-300k: on every
+  /// pairs file and the 7-Scenes pairs it is both faster and more precise than full resolution
+  /// (KITTI 33 -> 25 ms, 7-Scenes 58 -> 36 ms with point-to-point, errors equal or lower).
+  /// 20,000 is what small_gicp's recommended voxels (0.25 m outdoor, 2 cm Kinect) leave of a
+  /// KITTI scan or a 7-Scenes frame. Clouds of at most this many points, or that carry normals
+  /// or covariances, are used as they are.
+  std::size_t downsample_to = 20000;
+
+  bool operator==(const DownsamplingSettings&) const = default;
+};
+
+/// The settings of SGD-ICP, grouped by the part of the run that reads them (docs/registration.md,
+/// *Settings*): sampling, the step rule (optimizer), pairing, convergence, refinement, the
+/// surfaces (neighborhood), scaling, downsampling, the final statistics (evaluation) and the
+/// uncertainty; at the top level what the run as a whole reads.
+struct SgdSettings {
+  SamplingSettings sampling{};
   /// Small sources (the same ones: fewer than batch_size x window / 2 points) take Gauss-Newton
   /// steps in the coarse stage while `optimizer` is the default Adam (optimizer_for): on the
   /// bunny moved 30-90 deg it is as robust as Adam or more, 1.5x more precise in rotation and
   /// needs 120 instead of 180-700 mini-batches (docs/design.md, *Small sources*). A step rule
   /// set by the user is kept; false keeps `optimizer` always (the paper).
   bool small_source_gauss_newton = true;
-  /// d_max: pairs farther apart are rejected (paper: 0.5 in scaled units).
-  Distance max_correspondence_distance = Distance::scaled(0.5);
   /// Default: Adam with a step of 0.01 scaled units, measured best over the real pairs
   /// (docs/design.md): it keeps the paper's wide basin (KITTI copies moved by 30 m), which the
   /// greedier Gauss-Newton step loses, and reaches cm accuracy with the refinement stages.
   OptimizerSettings optimizer{OptimizerType::adam, default_learning_rate(OptimizerType::adam)};
+  PairingSettings pairing{};
   ConvergenceSettings convergence{};
   RefinementSettings refinement{};
   /// Cost of a pair (cost.hpp): the paper's point-to-point, point-to-plane, or plane-to-plane
@@ -65,41 +131,25 @@ struct SgdSettings {
   /// loses: KITTI pairs started 30 m / 30 deg off, 100 % solved against 70-75 % with
   /// point-to-plane throughout (40 starts); and it needs no normals.
   CostType coarse_cost = CostType::point_to_point;
-  /// Robust kernel on each pair's residual (robust_kernel.hpp) ...
-  KernelType kernel = KernelType::none;
-  /// ... and its scale: the residual size where it starts to down-weight.
-  Distance kernel_scale = Distance::scaled(0.01);
-  /// Keep only this fraction of each mini-batch's pairs, the closest ones (trimmed ICP,
-  /// Chetverikov et al. 2002), for partial overlap; 1 keeps all.
-  double trim_ratio = 1.0;
   /// Neighbourhoods for normals and covariances when a plane cost needs them: 10 neighbours
   /// where those lie flat, else 20. Against 20 everywhere: the PCL bunny (a sparse scan of a
   /// small object) 0.34 -> 0.20 deg, KITTI scans cut to 1 % of their points 26 instead of 16 of
   /// 40 registrations within 5 cm and 1 deg, the other pairs as before (18 sets of real and
   /// thinned pairs, 5 seeds each).
   NeighborhoodSettings neighborhood{.flat_k = 10};
-  /// Origin of the scaled space = pivot of roll, pitch, yaw. The paper's lower corner couples
-  /// rotation and translation strongly (a small rotation about a far corner is a large
-  /// translation of the points); the box centre decouples them (docs/design.md).
-  ScalingOrigin scaling_origin = ScalingOrigin::center;
-  /// Scale from the bulk of each cloud (bulk_bounding_box in scaling.hpp), so that a few far
-  /// points (spurious returns) do not shrink the scene; false = the paper's bounding box of
-  /// every point. The far points left out are counted in RegistrationResult::far_points.
-  bool robust_scaling = true;
+  ScalingSettings scaling{};
   /// Hard limit on iterations (mini-batches); reaching it means "not converged".
   std::size_t max_iterations = 4000;
-  /// Seed of the mini-batch sampler; same inputs and seed give the same result.
-  std::uint64_t seed = 2019;
   /// Return the mean of the iterates of the final stage's stationary window (the last
   /// `window` iterations) instead of the last iterate.
   bool average_iterates = true;
-  /// Source points used for the final inlier statistics (0 = all).
-  std::size_t evaluation_points = 2000;
   /// Record a per-iteration trace in the result.
   bool record_trace = false;
-  /// Check the final alignment for degenerate geometry (a plane, a line, a corridor) and report
-  /// it in the result (evaluation.hpp); costs about `evaluation_points` k-nearest queries.
-  bool check_degeneracy = true;
+  /// The final statistics (evaluate_alignment): source points evaluated (0 = all) and whether
+  /// to check the final alignment for degenerate geometry (a plane, a line, a corridor; about
+  /// `evaluation_points` k-nearest queries). Its num_threads is not read: the statistics use
+  /// the run's num_threads.
+  EvaluationSettings evaluation{};
   /// Threads of one registration: where the library builds the index (reference_index_for:
   /// align() on clouds, the CLI, Python) the voxel grid's passes over the raw points (the size
   /// search's counting, the moments), the grid's block surfaces alongside its KD-tree (or the
@@ -111,20 +161,7 @@ struct SgdSettings {
   /// on KITTI scans and Kinect frames (on an idle second core). 0 = every core. The result is
   /// identical for any count.
   std::size_t num_threads = 1;
-  /// Voxel-grid downsampling of both clouds before registering (points/voxel_grid.hpp): the voxel
-  /// side, metres; 0 = the grid downsample_to chooses.
-  double voxel_size_m = 0.0;
-  /// Without voxel_size_m: the grid that keeps about this many points of the reference
-  /// (voxel_size_for_count), applied to both clouds where the library builds the reference's
-  /// index (reference_index_for, align() on two clouds, the CLI, Python arrays); 0 = none. An
-  /// index built from a cloud as given keeps both clouds as given. One voxel grid evens out the
-  /// density of near and far returns and indexes ~20k points instead of 100k-300k: on every
-  /// pairs file and the 7-Scenes pairs it is both faster and more precise than full resolution
-  /// (KITTI 33 -> 25 ms, 7-Scenes 58 -> 36 ms with point-to-point, errors equal or lower).
-  /// 20,000 is what small_gicp's recommended voxels (0.25 m outdoor, 2 cm Kinect) leave of a
-  /// KITTI scan or a 7-Scenes frame. Clouds of at most this many points, or that carry normals
-  /// or covariances, are used as they are.
-  std::size_t downsample_to = 20000;
+  DownsamplingSettings downsampling{};
   /// Pose uncertainty of the result (uncertainty.hpp, docs/uncertainty.md): none, laplace or
   /// sgld, with the sampler's and the calibration's settings.
   UncertaintySettings uncertainty{};
@@ -165,12 +202,9 @@ struct BatchSettings {
   /// point-to-point (icp), point-to-plane (icp-plane) or plane-to-plane (gicp).
   CostType cost = CostType::point_to_point;
   /// d_max: pairs farther apart are rejected. Scaled units are a fraction of the largest side
-  /// of the joint bounding box (e.g. 0.05 = 6 m on a 120 m LiDAR scan, 10 cm on a 2 m Kinect view).
-  Distance max_correspondence_distance = Distance::scaled(0.05);
-  KernelType kernel = KernelType::none;
-  Distance kernel_scale = Distance::scaled(0.01);
-  /// Keep only this fraction of the pairs, the closest ones (trimmed ICP).
-  double trim_ratio = 1.0;
+  /// of the joint bounding box (e.g. 0.05 = 6 m on a 120 m LiDAR scan, 10 cm on a 2 m Kinect
+  /// view). The kernel and the trimming as SgdSettings's, the trimming per iteration.
+  PairingSettings pairing{.max_correspondence_distance = Distance::scaled(0.05)};
   std::size_t max_iterations = 100;
   /// Converged when an iteration moves the translation less than this (scaled units: 0.1 mm on
   /// a 10 m room, 1.5 mm on a 150 m LiDAR scene) ...
@@ -182,13 +216,13 @@ struct BatchSettings {
   double initial_damping = 1e-6;
   /// Neighbourhoods for the normals / covariances of the plane costs (estimated when missing).
   NeighborhoodSettings neighborhood{};
-  std::size_t evaluation_points = 2000;  ///< see SgdSettings
-  bool check_degeneracy = true;          ///< see SgdSettings
-  bool robust_scaling = true;            ///< see SgdSettings (the scale of scaled distances)
-  std::size_t num_threads = 1;           ///< see SgdSettings
-  double voxel_size_m = 0.0;             ///< see SgdSettings
-  /// See SgdSettings; 0 here: the batch baselines register every point unless asked.
-  std::size_t downsample_to = 0;
+  EvaluationSettings evaluation{};  ///< see SgdSettings
+  /// See ScalingSettings::robust (the scale of scaled distances; the batch methods' origin is
+  /// the lower corner, which does not change the scale).
+  bool robust_scaling = true;
+  std::size_t num_threads = 1;  ///< see SgdSettings
+  /// See SgdSettings; downsample_to 0 here: the batch methods register every point unless asked.
+  DownsamplingSettings downsampling{.downsample_to = 0};
   /// Record a per-iteration trace in the result: the pose after each iteration, every source
   /// point processed per iteration, step size 1, d_max, the pairs kept and, as the cost, their
   /// mean squared distance before the step (scaled units^2).
