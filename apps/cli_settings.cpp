@@ -62,40 +62,6 @@ Distance::Unit unit_of(const SettingsOptions& o) {
   return parse_enum<Distance::Unit>(o.max_distance_unit);
 }
 
-// The text of an option as the value of its setting.
-SettingValue parse_value(const Setting<SgdSettings>& s, const std::string& text,
-                         Distance::Unit unit) {
-  const std::string option = s.spelled(SettingNames::cli);
-  switch (s.kind) {
-    case SettingKind::count:
-      return parse_count(option, text, s.range);
-    case SettingKind::real:
-      return parse_real(option, text, s.range, "");
-    case SettingKind::flag:
-      return parse_flag(option, text);
-    case SettingKind::distance: {
-      const bool metres = unit == Distance::Unit::metres;
-      return Distance{parse_real(option, text, metres ? s.metres_range : s.range,
-                                 metres ? " m" : " scaled units"),
-                      unit};
-    }
-    case SettingKind::choice:
-      break;
-  }
-  return text;
-}
-
-// Sets one setting, with the option's name in any error.
-template <typename S>
-void apply(S& settings, const Setting<S>& s, const SettingValue& value) {
-  check_range(s, value, SettingNames::cli);
-  try {
-    s.set(settings, value);
-  } catch (const InvalidSettingsError& e) {
-    throw InvalidSettingsError(s.spelled(SettingNames::cli) + ": " + e.what());
-  }
-}
-
 std::optional<double> preprocessing_option(const std::optional<std::string>& text,
                                            std::string_view option, const ValueRange& range,
                                            std::string_view unit) {
@@ -118,8 +84,46 @@ std::string default_text(const Setting<SgdSettings>& s) {
   return " [default: " + text + "]";
 }
 
-// The help of one setting's option: text, values or unit, valid range, default.
+// The help of one registration setting's option: the table's, the learning rate's per rule, and
+// the defaults of both solvers and the paper preset.
 std::string help_of(const Setting<SgdSettings>& s) {
+  std::string help = detail::option_help(s);
+  if (s.name == "learning-rate") {
+    help += ". Unless given, each --optimizer's own:";
+    for (const auto name : canonical_names<OptimizerType>()) {
+      help += std::string(name == "sgd" ? " " : ", ") + std::string(name) + " " +
+              format_number(default_learning_rate(parse_enum<OptimizerType>(name)));
+    }
+  }
+  return help + default_text(s);
+}
+
+}  // namespace
+
+SettingValue detail::option_value(const SettingDescription& s, const std::string& text,
+                                  Distance::Unit unit) {
+  const std::string option = s.spelled(SettingNames::cli);
+  switch (s.kind) {
+    case SettingKind::count:
+      return parse_count(option, text, s.range);
+    case SettingKind::real:
+      return parse_real(option, text, s.range,
+                        s.unit.empty() ? std::string() : std::string(" ").append(s.unit));
+    case SettingKind::flag:
+      return parse_flag(option, text);
+    case SettingKind::distance: {
+      const bool metres = unit == Distance::Unit::metres;
+      return Distance{parse_real(option, text, metres ? s.metres_range : s.range,
+                                 metres ? " m" : " scaled units"),
+                      unit};
+    }
+    case SettingKind::choice:
+      break;
+  }
+  return text;
+}
+
+std::string detail::option_help(const SettingDescription& s) {
   std::string help(s.help);
   if (s.kind == SettingKind::choice) {
     help += ": ";
@@ -132,18 +136,10 @@ std::string help_of(const Setting<SgdSettings>& s) {
     help += ", " + (s.unit.empty() ? std::string("unitless") : std::string(s.unit)) + " in " +
             s.range.to_string();
   }
-  if (s.name == "learning-rate") {
-    help += ". Unless given, each --optimizer's own:";
-    for (const auto name : canonical_names<OptimizerType>()) {
-      help += std::string(name == "sgd" ? " " : ", ") + std::string(name) + " " +
-              format_number(default_learning_rate(parse_enum<OptimizerType>(name)));
-    }
-  }
-  return help + default_text(s);
+  return help;
 }
 
-// The value's type in the usage line: UINT, FLOAT, BOOL or the choices.
-std::string type_name_of(const Setting<SgdSettings>& s) {
+std::string detail::option_type(const SettingDescription& s) {
   switch (s.kind) {
     case SettingKind::count:
       return "UINT";
@@ -159,8 +155,6 @@ std::string type_name_of(const Setting<SgdSettings>& s) {
   for (const auto name : s.choices()) names += (names.empty() ? "" : ",") + std::string(name);
   return "{" + names + "}";
 }
-
-}  // namespace
 
 void add_method_options(CLI::App& app, SettingsOptions& o, bool several) {
   std::string help = "Method:";
@@ -203,7 +197,7 @@ void add_settings_options(CLI::App& app, SettingsOptions& o, bool with_voxel_gri
     app.add_option_function<std::string>(
            short_name + "--" + name, [&o, name](const std::string& text) { o.values[name] = text; },
            help_of(s))
-        ->type_name(type_name_of(s));
+        ->type_name(detail::option_type(s));
   }
 }
 
@@ -229,9 +223,9 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
   for (const auto& s : sgd_settings_table()) {
     const auto given = values.find(s.name);
     if (given == values.end()) continue;
-    const SettingValue value = parse_value(s, given->second, unit);
-    apply(m.sgd, s, value);
-    if (const auto* b = find_batch_setting(s.name)) apply(m.batch, *b, value);
+    const SettingValue value = detail::option_value(s, given->second, unit);
+    detail::apply_option(m.sgd, s, value);
+    if (const auto* b = find_batch_setting(s.name)) detail::apply_option(m.batch, *b, value);
   }
   m.random_ratio = preprocessing_option(o.random_ratio, "--random-ratio", kRandomRatio, "");
   m.sgd.validate(SettingNames::cli);

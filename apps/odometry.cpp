@@ -1,7 +1,6 @@
 // `sgdicp odometry INPUT --poses-out FILE`: scan-to-map odometry over a folder of frames, the
 // trajectory in the KITTI (and TUM) format, and its errors against a ground truth.
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -38,7 +37,7 @@ struct OdometryOptions {
   double rate_hz = 0.0;
   std::size_t max_frames = 0;
   bool quiet = false;
-  std::map<std::string, std::string, std::less<>> odometry_values;
+  OptionValues odometry_values;
   SettingsOptions settings;
   DepthOptions depth;
 };
@@ -58,25 +57,11 @@ std::optional<PinholeIntrinsics> intrinsics_option(const std::string& text) {
 }
 
 OdometrySettings odometry_settings(const OdometryOptions& o) {
-  OdometrySettings s;
-  for (const auto& [name, text] : o.odometry_values) {
-    const OdometrySetting& setting = *find_odometry_setting(name);
-    double v = 0.0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size()) {
-      throw InvalidSettingsError(setting.spelled(SettingNames::cli) + " " + text +
-                                 ": not a number");
-    }
-    setting.set(s, v);
-    if (setting.integer && v != std::floor(v)) {
-      throw InvalidSettingsError(setting.spelled(SettingNames::cli) + " " + text +
-                                 ": not an integer");
-    }
-  }
+  OdometrySettings s =
+      settings_from_options(OdometrySettings{}, odometry_settings_table(), o.odometry_values);
   // A d_max given on the command line is used as is, every frame.
   s.adaptive_threshold = !o.settings.values.contains("max-distance");
   s.step_within_threshold = !o.settings.values.contains("learning-rate");
-  s.validate(SettingNames::cli);
   return s;
 }
 
@@ -397,15 +382,7 @@ void add_odometry_command(CLI::App& app) {
                   "the map as kept, up to --max-points-per-voxel per map voxel]");
   cmd->add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
-  for (const auto& s : odometry_settings_table()) {
-    const std::string name(s.name);
-    const double v = s.get(OdometrySettings{});
-    cmd->add_option_function<std::string>(
-           "--" + name, [o, name](const std::string& text) { o->odometry_values[name] = text; },
-           std::string(s.help) + ", " + (s.unit.empty() ? "unitless" : std::string(s.unit)) +
-               " in " + s.range.to_string() + " [default: " + format_number(v) + "]")
-        ->type_name(s.integer ? "UINT" : "FLOAT");
-  }
+  add_table_options(*cmd, odometry_settings_table(), OdometrySettings{}, o->odometry_values);
   cmd->add_option("--method", o->settings.method,
                   "Registration step: " + method_list(", ") +
                       " (methods of `sgdicp register`) "

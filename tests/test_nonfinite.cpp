@@ -1,5 +1,5 @@
 // NaN and infinity in any input are rejected with a message that says where: a point of either
-// cloud, an entry of the initial transform, every floating setting of both solvers.
+// cloud, an entry of the initial transform, every floating setting of every settings table.
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/registration.hpp"
 #include "sgdicp/registration/settings.hpp"
@@ -109,9 +110,10 @@ void expect_table_rejects_non_finite(const std::vector<Setting<S>>& table) {
   }
 }
 
-TEST(NonFiniteSettings, EveryFloatingSettingOfBothSolversIsRejected) {
+TEST(NonFiniteSettings, EveryFloatingSettingOfEveryTableIsRejected) {
   expect_table_rejects_non_finite(sgd_settings_table());
   expect_table_rejects_non_finite(batch_settings_table());
+  expect_table_rejects_non_finite(odometry_settings_table());
 }
 
 // The neighbourhood's epsilon and viewpoint are not in the table (no CLI option) but are

@@ -1,15 +1,19 @@
-// Tests of the settings table (settings.hpp): every range is enforced by validate() with a
-// message naming the setting as spelled, the defaults and presets lie inside their ranges, the
-// enum and method names round-trip, and docs/registration.md lists every setting as the table
-// says (default, paper() value, range).
+// Tests of the settings tables (settings.hpp; the odometry's): every range is enforced by
+// validate() with a message naming the setting as spelled, the defaults and presets lie inside
+// their ranges, the enum and method names round-trip, and docs/registration.md lists every
+// setting as the table says (default, paper() value, range).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 #include "sgdicp/core/result.hpp"
+#include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/settings.hpp"
 
@@ -44,9 +48,12 @@ std::string message_of(const S& settings, SettingNames names) {
   return "";
 }
 
-// Every end of every range: inside passes, outside fails naming the setting and its range.
+// Every end of every range: inside passes, outside fails naming the setting and its range. The
+// C++ message starts with `field_prefix` and the member; `bounded_together` are settings that
+// another bounds too (a product, an order), whose ends are not valid on their own.
 template <typename S>
-void check_ranges(const std::vector<Setting<S>>& table) {
+void check_ranges(const std::vector<Setting<S>>& table, std::string_view field_prefix = "",
+                  std::initializer_list<std::string_view> bounded_together = {}) {
   for (const auto& s : table) {
     if (s.kind == SettingKind::flag || s.kind == SettingKind::choice) continue;
     for (const auto unit : {Distance::Unit::scaled, Distance::Unit::metres}) {
@@ -64,14 +71,18 @@ void check_ranges(const std::vector<Setting<S>>& table) {
         EXPECT_NE(cli.find("--" + std::string(s.name) + " "), std::string::npos) << cli;
         EXPECT_NE(cli.find(r.to_string()), std::string::npos) << cli;
         const std::string field = message_of(settings, SettingNames::field);
-        EXPECT_EQ(field.rfind(std::string(s.field) + " = ", 0), 0U) << field;
+        EXPECT_EQ(field.rfind(std::string(field_prefix) + std::string(s.field) + " = ", 0), 0U)
+            << field;
       }
       for (const double good : {r.min, r.max}) {
         if ((good == r.min && r.min_open) || (good == r.max && r.max_open)) continue;
         if (s.kind == SettingKind::count && good >= 0x1p64) continue;
         S settings{};
         s.set(settings, value_at(s, good, unit));
-        if (s.name == "batch-size" || s.name == "window") continue;  // their product is bounded
+        if (std::find(bounded_together.begin(), bounded_together.end(), s.name) !=
+            bounded_together.end()) {
+          continue;
+        }
         EXPECT_EQ(message_of(settings, SettingNames::field), "");
       }
     }
@@ -79,8 +90,9 @@ void check_ranges(const std::vector<Setting<S>>& table) {
 }
 
 TEST(SettingsTable, EveryRangeIsEnforcedWithTheSpelledName) {
-  check_ranges(sgd_settings_table());
+  check_ranges(sgd_settings_table(), "", {"batch-size", "window"});  // their product is bounded
   check_ranges(batch_settings_table());
+  check_ranges(odometry_settings_table(), "", {"min-range"});  // below max-range
 }
 
 TEST(SettingsTable, DefaultsAndPresetsAreValid) {
@@ -91,6 +103,7 @@ TEST(SettingsTable, DefaultsAndPresetsAreValid) {
   }
   EXPECT_NO_THROW(BatchSettings{}.validate());
   EXPECT_NO_THROW(BatchSettings::gicp().validate());
+  EXPECT_NO_THROW(OdometrySettings{}.validate());
 }
 
 TEST(SettingsTable, NamesAreUniqueAndSharedNamesMeanTheSameRange) {

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -116,6 +117,14 @@ void bind_settings_keywords(py::module_& m);
 /// applies to the SGD methods only, and InvalidSettingsError for an invalid value.
 [[nodiscard]] BatchSettings with_batch_overrides(BatchSettings base, const py::dict& overrides,
                                                  std::string_view method);
+
+/// `base` with the keywords of `overrides` that name a setting of `table` (the odometry's: no
+/// distances) set in table order and removed from `overrides`, then
+/// validated; the other keywords stay for the registration's settings. Throws TypeError for a
+/// value of the wrong type and InvalidSettingsError (ValueError) for an invalid one, naming the
+/// keyword.
+template <typename S>
+[[nodiscard]] S take_keywords(S base, py::dict& overrides, const std::vector<Setting<S>>& table);
 
 /// "name (default, range), ..." for every keyword of a solver, wrapped at 96 columns after
 /// `indent`: the keyword lists of register()'s docstring. `core` is the module, with the settings

@@ -1,6 +1,7 @@
 // Python values as settings: the typed parsing of Python values (bindings.hpp) and the flat
 // keyword overrides shared by Settings(...), Settings.paper(...), Settings.replace(...),
-// BatchSettings(...) and register(...), named after the library's settings table.
+// BatchSettings(...) and register(...), named after the library's settings table; the same for
+// the odometry's table (take_keywords).
 #include <algorithm>
 #include <array>
 #include <optional>
@@ -13,6 +14,7 @@
 
 #include "bindings.hpp"
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 
 namespace sgdicp::python {
@@ -171,15 +173,12 @@ std::string keyword_list(const std::vector<Setting<S>>& table) {
                        "; the batch keyword settings are: " + keyword_list(batch_settings_table()));
 }
 
-// Applies the keywords of `overrides` that name a setting of `table`, in table order (so that
-// optimizer= sets the learning rate before learning_rate= overrides it), with the unit of
-// max_distance_unit for distances given as numbers, then validates.
+// Sets the keywords of `overrides` that name a setting of `table`, in table order (so that
+// optimizer= sets the learning rate before learning_rate= overrides it), range-checked, a
+// distance given as a number in `unit`. Returns whether any distance was given as a number.
 template <typename S>
-S apply_keywords(S s, const py::dict& overrides, const std::vector<Setting<S>>& table) {
-  Distance::Unit unit = Distance::Unit::scaled;
-  const bool unit_given = overrides.contains("max_distance_unit");
-  if (unit_given)
-    unit = enum_from_object<Distance::Unit>(overrides["max_distance_unit"], "max_distance_unit");
+bool set_keywords(S& s, const py::dict& overrides, const std::vector<Setting<S>>& table,
+                  Distance::Unit unit) {
   bool numeric_distance = false;
   for (const auto& setting : table) {
     const std::string keyword = keyword_of(setting.name);
@@ -191,6 +190,18 @@ S apply_keywords(S s, const py::dict& overrides, const std::vector<Setting<S>>& 
     check_range(setting, v, SettingNames::python);
     setting.set(s, v);
   }
+  return numeric_distance;
+}
+
+// set_keywords with the unit of max_distance_unit (an error when no distance uses it), then
+// validates.
+template <typename S>
+S apply_keywords(S s, const py::dict& overrides, const std::vector<Setting<S>>& table) {
+  Distance::Unit unit = Distance::Unit::scaled;
+  const bool unit_given = overrides.contains("max_distance_unit");
+  if (unit_given)
+    unit = enum_from_object<Distance::Unit>(overrides["max_distance_unit"], "max_distance_unit");
+  const bool numeric_distance = set_keywords(s, overrides, table, unit);
   if (unit_given && !numeric_distance) {
     std::vector<std::string> distances;
     for (const auto& setting : table) {
@@ -262,6 +273,20 @@ SgdSettings with_overrides(SgdSettings s, const py::dict& overrides) {
   }
   return apply_keywords(std::move(s), overrides, sgd_settings_table());
 }
+
+template <typename S>
+S take_keywords(S base, py::dict& overrides, const std::vector<Setting<S>>& table) {
+  set_keywords(base, overrides, table, Distance::Unit::scaled);
+  for (const auto& setting : table) {
+    const std::string keyword = keyword_of(setting.name);
+    if (overrides.contains(keyword)) overrides.attr("pop")(keyword);
+  }
+  base.validate(SettingNames::python);
+  return base;
+}
+
+template OdometrySettings take_keywords(OdometrySettings, py::dict&,
+                                        const std::vector<Setting<OdometrySettings>>&);
 
 BatchSettings with_batch_overrides(BatchSettings s, const py::dict& overrides,
                                    std::string_view method) {

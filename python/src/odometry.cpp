@@ -14,26 +14,12 @@ namespace {
 
 using namespace pybind11::literals;
 
-// The odometry keywords of `overrides` applied to the defaults; the others returned.
+// The odometry keywords of `overrides` applied to the defaults; the others left for the
+// registration.
 OdometrySettings take_odometry_keywords(py::dict& overrides) {
-  OdometrySettings s;
-  py::list taken;
-  for (const auto& [key, value] : overrides) {
-    const std::string name = py::str(key);
-    if (name.find('-') != std::string::npos) continue;
-    const OdometrySetting* setting = find_odometry_setting(name);
-    if (!setting) continue;
-    const double v =
-        setting->integer
-            ? static_cast<double>(as_count(value, setting->spelled(SettingNames::python)))
-            : as_real(value, setting->spelled(SettingNames::python));
-    setting->set(s, v);
-    taken.append(key);
-  }
-  for (const auto& key : taken) overrides.attr("pop")(key);
+  OdometrySettings s = take_keywords(OdometrySettings{}, overrides, odometry_settings_table());
   s.adaptive_threshold = !overrides.contains("max_distance");
   s.step_within_threshold = !overrides.contains("learning_rate");
-  s.validate(SettingNames::python);
   return s;
 }
 
@@ -64,7 +50,7 @@ Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
   } catch (const py::type_error& e) {
     std::string names;
     for (const auto& s : odometry_settings_table()) {
-      names += (names.empty() ? "" : ", ") + s.spelled(SettingNames::field);
+      names += (names.empty() ? "" : ", ") + keyword_of(s.name);
     }
     throw py::type_error(std::string(e.what()) + "; the odometry keywords: " + names);
   }
@@ -132,8 +118,8 @@ void bind_odometry(py::module_& m) {
 
   std::string keywords;
   for (const auto& s : odometry_settings_table()) {
-    keywords += (keywords.empty() ? "" : ", ") + s.spelled(SettingNames::field) + " (" +
-                format_number(s.get(OdometrySettings{})) + (s.unit.empty() ? "" : " ") +
+    keywords += (keywords.empty() ? "" : ", ") + keyword_of(s.name) + " (" +
+                format_value(s.get(OdometrySettings{})) + (s.unit.empty() ? "" : " ") +
                 std::string(s.unit) + ")";
   }
   py::class_<Odometry>(m, "Odometry",

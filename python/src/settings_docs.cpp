@@ -158,7 +158,8 @@ constexpr std::string_view kind_name(SettingKind kind) {
 
 // The keywords that the overrides of a table accept (keywords.cpp), in table order, as
 // (keyword, kind, the enum class of a choice or None); max_distance_unit, the unit of the
-// distances given as numbers, follows the first distance.
+// distances given as numbers, follows the first distance. `defaults` (the settings class's
+// instance) names a choice's enum: None for the tables without choices.
 template <typename S>
 py::list keyword_rows(const std::vector<Setting<S>>& table, const py::object& defaults) {
   py::list rows;
@@ -171,16 +172,6 @@ py::list keyword_rows(const std::vector<Setting<S>>& table, const py::object& de
       rows.append(py::make_tuple("max_distance_unit", "choice", "DistanceUnit"));
       unit_listed = true;
     }
-  }
-  return rows;
-}
-
-// The odometry's own keywords (odometry_settings_table): numbers, counted or real.
-py::list odometry_keyword_rows() {
-  py::list rows;
-  for (const auto& s : odometry_settings_table()) {
-    rows.append(
-        py::make_tuple(s.spelled(SettingNames::field), s.integer ? "count" : "real", py::none()));
   }
   return rows;
 }
@@ -205,7 +196,7 @@ void bind_settings_keywords(py::module_& m) {
       [](const std::string& solver) {
         if (solver == "sgd")
           return keyword_rows(sgd_settings_table(), py::type::of<SgdSettings>()());
-        if (solver == "odometry") return odometry_keyword_rows();
+        if (solver == "odometry") return keyword_rows(odometry_settings_table(), py::none());
         if (solver != "batch") {
           throw py::value_error("solver must be 'sgd', 'batch' or 'odometry'");
         }

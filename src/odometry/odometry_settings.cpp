@@ -1,104 +1,73 @@
 // The odometry's settings table (odometry_settings_table), which the CLI and Python read, and
 // their validation.
-#include <algorithm>
-#include <cmath>
 #include <string>
 
+#include "registration/setting_rows.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 
 namespace sgdicp {
+namespace {
 
-const std::vector<OdometrySetting>& odometry_settings_table() {
-  using S = OdometrySettings;
-  static const std::vector<OdometrySetting> table{
-      {"max-range",
-       false,
-       {0.0, 1e6, true},
-       "m",
-       "Points farther from the sensor are dropped; the map keeps voxels within this radius",
-       [](const S& s) { return s.max_range_m; },
-       [](S& s, double v) { s.max_range_m = v; }},
-      {"min-range",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Points closer to the sensor are dropped",
-       [](const S& s) { return s.min_range_m; },
-       [](S& s, double v) { s.min_range_m = v; }},
-      {"voxel-size",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Map voxel side (frames thinned to half of it for the map, 1.5 times it for the "
-       "registration); 0 = 1 % of the first frame's 99th-percentile range",
-       [](const S& s) { return s.voxel_size_m; },
-       [](S& s, double v) { s.voxel_size_m = v; }},
-      {"max-points-per-voxel",
-       true,
-       {1.0, 10000.0},
-       "",
-       "Points kept per map voxel",
-       [](const S& s) { return static_cast<double>(s.max_points_per_voxel); },
-       [](S& s, double v) { s.max_points_per_voxel = static_cast<std::size_t>(v); }},
-      {"initial-threshold",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Correspondence threshold sigma before any motion is observed (d_max = 3 sigma); 0 = 2 "
-       "voxels",
-       [](const S& s) { return s.initial_threshold_m; },
-       [](S& s, double v) { s.initial_threshold_m = v; }},
-      {"min-motion",
-       false,
-       {0.0, 1e6},
-       "m",
-       "Deviations from the prediction below this do not adapt the threshold; 0 = voxel / 10",
-       [](const S& s) { return s.min_motion_m; },
-       [](S& s, double v) { s.min_motion_m = v; }},
-      {"max-translation-per-frame",
-       false,
-       {0.0, 1e6, true},
-       "m",
-       "A registered motion between consecutive frames beyond this is rejected and retried",
-       [](const S& s) { return s.max_translation_per_frame_m; },
-       [](S& s, double v) { s.max_translation_per_frame_m = v; }},
-      {"max-rotation-per-frame",
-       false,
-       {0.0, 180.0, true},
-       "deg",
-       "A registered rotation between consecutive frames beyond this is rejected and retried; 180 "
-       "= "
-       "no bound (a wrong registration is caught by its overlap with the map)",
-       [](const S& s) { return s.max_rotation_per_frame_deg; },
-       [](S& s, double v) { s.max_rotation_per_frame_deg = v; }},
+using detail::setting;
+using S = OdometrySettings;
+
+// A length in metres up to a thousand kilometres; 0 where 0 means "derived" (auto).
+constexpr ValueRange kLength{0.0, 1e6};
+constexpr ValueRange kPositiveLength{0.0, 1e6, true};
+
+std::vector<Setting<S>> make_table() {
+  return {
+      setting<S, &S::max_range_m>(
+          {"max-range", "max_range_m", kPositiveLength, "m",
+           "Points farther from the sensor are dropped; the map keeps voxels within this radius"}),
+      setting<S, &S::min_range_m>(
+          {"min-range", "min_range_m", kLength, "m", "Points closer to the sensor are dropped"}),
+      setting<S, &S::voxel_size_m>(
+          {"voxel-size", "voxel_size_m", kLength, "m",
+           "Map voxel side (frames thinned to half of it for the map, 1.5 times it for the "
+           "registration); 0 = 1 % of the first frame's 99th-percentile range"}),
+      setting<S, &S::max_points_per_voxel>({"max-points-per-voxel",
+                                            "max_points_per_voxel",
+                                            {1.0, 10000.0},
+                                            "",
+                                            "Points kept per map voxel"}),
+      setting<S, &S::initial_threshold_m>(
+          {"initial-threshold", "initial_threshold_m", kLength, "m",
+           "Correspondence threshold sigma before any motion is observed (d_max = 3 sigma); 0 = "
+           "2 voxels"}),
+      setting<S, &S::min_motion_m>(
+          {"min-motion", "min_motion_m", kLength, "m",
+           "Deviations from the prediction below this do not adapt the threshold; 0 = voxel / "
+           "10"}),
+      setting<S, &S::max_translation_per_frame_m>(
+          {"max-translation-per-frame", "max_translation_per_frame_m", kPositiveLength, "m",
+           "A registered motion between consecutive frames beyond this is rejected and "
+           "retried"}),
+      setting<S, &S::max_rotation_per_frame_deg>(
+          {"max-rotation-per-frame",
+           "max_rotation_per_frame_deg",
+           {0.0, 180.0, true},
+           "deg",
+           "A registered rotation between consecutive frames beyond this is rejected and "
+           "retried; 180 = no bound (a wrong registration is caught by its overlap with the "
+           "map)"}),
   };
+}
+
+}  // namespace
+
+const std::vector<Setting<OdometrySettings>>& odometry_settings_table() {
+  static const std::vector<Setting<OdometrySettings>> table = make_table();
   return table;
 }
 
-std::string OdometrySetting::spelled(SettingNames names) const {
-  std::string out(name);
-  if (names == SettingNames::cli) return "--" + out;
-  std::replace(out.begin(), out.end(), '-', '_');
-  return names == SettingNames::python ? out + "=" : out;
-}
-
-const OdometrySetting* find_odometry_setting(std::string_view name) {
-  for (const auto& s : odometry_settings_table()) {
-    if (detail::same_name(s.name, name)) return &s;
-  }
-  return nullptr;
+const Setting<OdometrySettings>* find_odometry_setting(std::string_view name) {
+  return detail::find_in(odometry_settings_table(), name);
 }
 
 void OdometrySettings::validate(SettingNames names) const {
-  for (const auto& s : odometry_settings_table()) {
-    const double v = s.get(*this);
-    if (!std::isfinite(v) || !s.range.contains(v) || (s.integer && v != std::floor(v))) {
-      throw InvalidSettingsError(s.spelled(names) + " " + format_number(v) + ": must be in " +
-                                 s.range.to_string() + (s.unit.empty() ? "" : " ") +
-                                 std::string(s.unit));
-    }
-  }
+  detail::check_table(*this, odometry_settings_table(), names);
   if (min_range_m >= max_range_m) {
     throw InvalidSettingsError(find_odometry_setting("min-range")->spelled(names) + " " +
                                format_number(min_range_m) + ": must be below " +

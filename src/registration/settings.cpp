@@ -6,6 +6,7 @@
 #include <limits>
 #include <type_traits>
 
+#include "registration/setting_rows.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/threads.hpp"
 
@@ -113,8 +114,7 @@ std::string format_value(const SettingValue& value) {
   return std::visit(Visitor{}, value);
 }
 
-template <typename S>
-std::string Setting<S>::spelled(SettingNames names) const {
+std::string SettingDescription::spelled(SettingNames names) const {
   switch (names) {
     case SettingNames::cli:
       return "--" + std::string(name);
@@ -129,11 +129,11 @@ std::string Setting<S>::spelled(SettingNames names) const {
   return std::string(field);
 }
 
-template <typename S>
-void check_range(const Setting<S>& setting, const SettingValue& value, SettingNames names) {
+void check_range(const SettingDescription& setting, const SettingValue& value, SettingNames names) {
   double number = 0.0;
   const ValueRange* range = &setting.range;
   std::string unit;
+  if (!setting.unit.empty()) unit.append(" ").append(setting.unit);
   if (const auto* count = std::get_if<std::uint64_t>(&value)) {
     number = static_cast<double>(*count);
   } else if (const auto* real = std::get_if<double>(&value)) {
@@ -159,15 +159,10 @@ namespace {
 // batch_size x window pair distances are kept for the refinement (4 bytes each, twice).
 constexpr double kMaxWindowPairs = 1e8;
 
-template <typename T>
-void check_table(const T& settings, const std::vector<Setting<T>>& table, SettingNames names) {
-  for (const auto& s : table) check_range(s, s.get(settings), names);
-}
-
 }  // namespace
 
 void SgdSettings::validate(SettingNames names) const {
-  check_table(*this, sgd_settings_table(), names);
+  detail::check_table(*this, sgd_settings_table(), names);
   neighborhood.validate();  // epsilon and the viewpoint are not in the table
   const double pairs =
       static_cast<double>(sampling.batch_size) * static_cast<double>(convergence.window);
@@ -182,7 +177,7 @@ void SgdSettings::validate(SettingNames names) const {
 }
 
 void BatchSettings::validate(SettingNames names) const {
-  check_table(*this, batch_settings_table(), names);
+  detail::check_table(*this, batch_settings_table(), names);
   neighborhood.validate();  // epsilon and the viewpoint are not in the table
 }
 
@@ -195,10 +190,5 @@ void OptimizerSettings::validate() const {
     }
   }
 }
-
-template struct Setting<SgdSettings>;
-template struct Setting<BatchSettings>;
-template void check_range(const Setting<SgdSettings>&, const SettingValue&, SettingNames);
-template void check_range(const Setting<BatchSettings>&, const SettingValue&, SettingNames);
 
 }  // namespace sgdicp

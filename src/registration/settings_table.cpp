@@ -2,106 +2,15 @@
 // range, unit and help, which the CLI, Python and docs/registration.md read.
 #include "sgdicp/registration/settings.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
-#include <string>
 #include <string_view>
-#include <type_traits>
 #include <vector>
 
+#include "registration/setting_rows.hpp"
 #include "sgdicp/core/threads.hpp"
 
 namespace sgdicp {
 
 // ---- the tables
-
-namespace detail {
-namespace {
-
-// Every distance in metres: a micrometre to a thousand kilometres (a 15 cm scan to a km map).
-constexpr ValueRange kMetresRange{1e-6, 1e6};
-
-template <typename T>
-constexpr SettingKind kind_of() {
-  if constexpr (std::is_same_v<T, bool>) {
-    return SettingKind::flag;
-  } else if constexpr (std::is_unsigned_v<T>) {
-    return SettingKind::count;
-  } else if constexpr (std::is_floating_point_v<T>) {
-    return SettingKind::real;
-  } else if constexpr (std::is_same_v<T, Distance>) {
-    return SettingKind::distance;
-  } else {
-    static_assert(std::is_enum_v<T>);
-    return SettingKind::choice;
-  }
-}
-
-template <typename T>
-SettingValue to_value(const T& v) {
-  if constexpr (kind_of<T>() == SettingKind::count) {
-    return static_cast<std::uint64_t>(v);
-  } else if constexpr (kind_of<T>() == SettingKind::choice) {
-    return std::string(enum_name(v));
-  } else {
-    return v;
-  }
-}
-
-template <typename T>
-T from_value(const SettingValue& v) {
-  if constexpr (kind_of<T>() == SettingKind::count) {
-    return static_cast<T>(std::get<std::uint64_t>(v));
-  } else if constexpr (kind_of<T>() == SettingKind::choice) {
-    return parse_enum<T>(std::get<std::string>(v));
-  } else {
-    return std::get<T>(v);
-  }
-}
-
-template <typename S, auto... Members>
-struct Field {
-  static auto& ref(S& s) { return (s.*....*Members); }
-  static const auto& ref(const S& s) { return (s.*....*Members); }
-  using Type = std::remove_cvref_t<decltype(ref(std::declval<S&>()))>;
-};
-
-// The description of one setting; `noun` names a choice's values in an unknown-name message.
-struct Describe {
-  std::string_view name;
-  std::string_view field;
-  ValueRange range{};
-  std::string_view unit{};
-  std::string_view help{};
-  bool keyword_only = false;
-};
-
-template <typename S, auto... Members>
-Setting<S> setting(const Describe& d) {
-  using F = Field<S, Members...>;
-  using T = typename F::Type;
-  Setting<S> s;
-  s.name = d.name;
-  s.field = d.field;
-  s.kind = kind_of<T>();
-  s.range = d.range;
-  s.metres_range = kMetresRange;
-  s.unit = d.unit;
-  s.help = d.help;
-  s.keyword_only = d.keyword_only;
-  if constexpr (kind_of<T>() == SettingKind::choice) {
-    s.choices = [] { return canonical_names<T>(); };
-  } else {
-    s.choices = nullptr;
-  }
-  s.get = [](const S& x) { return to_value(F::ref(x)); };
-  s.set = [](S& x, const SettingValue& v) { F::ref(x) = from_value<T>(v); };
-  return s;
-}
-
-}  // namespace
-}  // namespace detail
 
 namespace {
 
@@ -522,14 +431,6 @@ std::vector<Setting<B>> make_batch_table() {
   };
 }
 
-template <typename T>
-const Setting<T>* find_in(const std::vector<Setting<T>>& table, std::string_view name) {
-  for (const auto& s : table) {
-    if (detail::same_name(s.name, name)) return &s;
-  }
-  return nullptr;
-}
-
 }  // namespace
 
 const std::vector<Setting<SgdSettings>>& sgd_settings_table() {
@@ -543,11 +444,11 @@ const std::vector<Setting<BatchSettings>>& batch_settings_table() {
 }
 
 const Setting<SgdSettings>* find_sgd_setting(std::string_view name) {
-  return find_in(sgd_settings_table(), name);
+  return detail::find_in(sgd_settings_table(), name);
 }
 
 const Setting<BatchSettings>* find_batch_setting(std::string_view name) {
-  return find_in(batch_settings_table(), name);
+  return detail::find_in(batch_settings_table(), name);
 }
 
 }  // namespace sgdicp

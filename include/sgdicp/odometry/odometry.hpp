@@ -75,21 +75,11 @@ struct OdometrySettings {
   bool operator==(const OdometrySettings&) const = default;
 };
 
-/// One numeric setting of OdometrySettings as the CLI (--name) and Python (name with '_')
-/// spell it, with its range, unit and help: the one table both read.
-struct OdometrySetting {
-  std::string_view name;
-  bool integer;
-  ValueRange range;
-  std::string_view unit;
-  std::string_view help;
-  double (*get)(const OdometrySettings&);
-  void (*set)(OdometrySettings&, double);
-  [[nodiscard]] std::string spelled(SettingNames names) const;
-};
-[[nodiscard]] const std::vector<OdometrySetting>& odometry_settings_table();
+/// Every numeric setting of OdometrySettings a user can name (settings.hpp's Setting rows): the
+/// CLI's `sgdicp odometry` options and Odometry's Python keywords, with range, unit and help.
+[[nodiscard]] const std::vector<Setting<OdometrySettings>>& odometry_settings_table();
 /// The setting called `name` ('_' may stand for '-'), or nullptr.
-[[nodiscard]] const OdometrySetting* find_odometry_setting(std::string_view name);
+[[nodiscard]] const Setting<OdometrySettings>* find_odometry_setting(std::string_view name);
 
 /// The correspondence threshold sigma of KISS-ICP's eq. (4)-(5): the RMS, over the frames so far,
 /// of the deviation of each registration from its prediction, measured as the largest

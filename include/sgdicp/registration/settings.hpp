@@ -5,7 +5,8 @@
 // checks the ranges of this table, the CLI builds its options from it, the Python keyword
 // overrides apply through it, and the settings table of docs/registration.md is tested against
 // it. Defaults are never written in the table: they are read from SgdSettings{},
-// SgdSettings::paper() and BatchSettings{}.
+// SgdSettings::paper() and BatchSettings{}. The odometry's settings have a table of the same
+// Setting rows (odometry.hpp), read the same way.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -266,25 +267,32 @@ struct ValueRange {
 /// The value of one setting, whatever its kind (a choice by its canonical name).
 using SettingValue = std::variant<std::uint64_t, double, bool, Distance, std::string>;
 
-template <typename S>
-struct Setting {
+/// What a table says of one setting, whatever the settings struct: names, kind, range, unit,
+/// help. Read by validate(), the CLI's options, Python's keywords and the docs tests.
+struct SettingDescription {
   std::string_view name;   ///< the CLI option without "--"; Python: '-' replaced by '_'
   std::string_view field;  ///< the C++ member, e.g. "optimizer.learning_rate"
-  SettingKind kind;
+  SettingKind kind = SettingKind::real;
   ValueRange range;         ///< count and real; a distance in scaled units
   ValueRange metres_range;  ///< a distance in metres
-  std::string_view unit;    ///< of a real, for help and docs ("rad", "scaled units"; "" = none)
+  std::string_view unit;    ///< of a count or real, for help, docs and messages ("rad"; "" = none)
   std::string_view help;    ///< one sentence, no default (read from the settings)
-  std::vector<std::string_view> (*choices)();  ///< the names of a choice; nullptr otherwise
-  SettingValue (*get)(const S&);
-  /// Sets the value (a choice by any accepted name); throws InvalidSettingsError for an unknown
-  /// name. Setting "optimizer" also sets the learning rate to default_learning_rate().
-  void (*set)(S&, const SettingValue&);
+  std::vector<std::string_view> (*choices)() = nullptr;  ///< the names of a choice
   /// Not a CLI option (the CLI chooses the cost with --method and records a trace with --trace).
   bool keyword_only = false;
 
   /// `name` as the user spells it: --learning-rate, learning_rate=, optimizer.learning_rate.
   [[nodiscard]] std::string spelled(SettingNames names) const;
+};
+
+/// One row of the table of a settings struct S (SgdSettings, BatchSettings, OdometrySettings): its
+/// description and the access to its member.
+template <typename S>
+struct Setting : SettingDescription {
+  SettingValue (*get)(const S&) = nullptr;
+  /// Sets the value (a choice by any accepted name); throws InvalidSettingsError for an unknown
+  /// name. Setting "optimizer" also sets the learning rate to default_learning_rate().
+  void (*set)(S&, const SettingValue&) = nullptr;
 };
 
 /// Every setting of SgdSettings a user can name, in the order in which they are applied
@@ -300,9 +308,8 @@ struct Setting {
 /// A value as the docs and --help print it: 160, 0.01, 1e-06, true, 0.5 scaled, 2 m, adam.
 [[nodiscard]] std::string format_value(const SettingValue& value);
 
-/// Throws InvalidSettingsError "SPELLED VALUE: must be in RANGE" unless `value` lies in the
+/// Throws InvalidSettingsError "SPELLED VALUE: must be in RANGE UNIT" unless `value` lies in the
 /// setting's range (a distance: the range of its unit).
-template <typename S>
-void check_range(const Setting<S>& setting, const SettingValue& value, SettingNames names);
+void check_range(const SettingDescription& setting, const SettingValue& value, SettingNames names);
 
 }  // namespace sgdicp
