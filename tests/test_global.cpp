@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -224,14 +225,54 @@ TEST(Global, PlaneAndSphereGiveNoSolution) {
   }
 }
 
-TEST(Global, SettingsOutOfRangeAreRefused) {
+// The message of the InvalidSettingsError that `f` throws ("" if none).
+template <typename F>
+std::string refusal(F f) {
+  try {
+    f();
+  } catch (const InvalidSettingsError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Global, SettingsOutOfRangeAreRefusedNamingTheSetting) {
   const PointCloud cloud = test::synthetic_scene(1, 2000);
   GlobalSettings g;
   g.confidence = 1.0;
-  EXPECT_THROW((void)align_global(cloud, cloud, SgdSettings{}, g), InvalidSettingsError);
+  EXPECT_EQ(refusal([&] { (void)align_global(cloud, cloud, SgdSettings{}, g); }),
+            "GlobalSettings.confidence = 1: must be in (0, 1)");
   g = {};
   g.hypotheses = 0;
-  EXPECT_THROW((void)estimate_global(cloud, ReferenceIndex(cloud), g), InvalidSettingsError);
+  EXPECT_EQ(refusal([&] { (void)estimate_global(cloud, ReferenceIndex(cloud), g); }),
+            "GlobalSettings.hypotheses = 0: must be in [1, 1000]");
+  g = {};
+  g.feature_radius_voxels = -2.0;
+  EXPECT_EQ(refusal([&] { g.validate(SettingNames::cli); }),
+            "--global-feature-radius -2: must be in (0, 1000] voxels");
+  EXPECT_EQ(refusal([&] { g.validate(SettingNames::python); }),
+            "global_feature_radius=-2: must be in (0, 1000] voxels");
+  EXPECT_EQ(refusal([] { GlobalSettings{}.validate(); }), "");
+}
+
+TEST(Global, SettingsReachTheEstimate) {
+  // Set through the table as the CLI and Python do: min_points beyond the feature grid stops the
+  // estimate before any feature is computed; the default goes on to a solution.
+  const PointCloud reference = test::synthetic_scene(3, 20000);
+  const PointCloud source =
+      transformed(reference, test::make_transform(0.2, -0.1, 2.0, Eigen::Vector3d(1, 0, 0)));
+  const ReferenceIndex index(reference);
+  GlobalSettings g;
+  find_global_setting("global_min_points")->set(g, std::uint64_t{50000});
+  EXPECT_EQ(g.min_points, 50000U);
+  const GlobalEstimate refused = estimate_global(source, index, g);
+  EXPECT_FALSE(refused.reliable);
+  EXPECT_NE(refused.message.find("at least 50000 each needed"), std::string::npos)
+      << refused.message;
+  EXPECT_EQ(refused.correspondences, 0U);
+  const GlobalEstimate found = estimate_global(source, index);
+  EXPECT_GT(found.correspondences, 0U);
+  EXPECT_TRUE(found.reliable) << found.message;
 }
 
 TEST(Fpfh, DescriptorsAreInvariantToRigidMotion) {

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/registration.hpp"
@@ -114,6 +115,7 @@ TEST(NonFiniteSettings, EveryFloatingSettingOfEveryTableIsRejected) {
   expect_table_rejects_non_finite(sgd_settings_table());
   expect_table_rejects_non_finite(batch_settings_table());
   expect_table_rejects_non_finite(odometry_settings_table());
+  expect_table_rejects_non_finite(global_settings_table());
 }
 
 // The neighbourhood's epsilon and viewpoint are not in the table (no CLI option) but are

@@ -1,18 +1,20 @@
-// Tests of the settings tables (settings.hpp; the odometry's): every range is enforced by
-// validate() with a message naming the setting as spelled, the defaults and presets lie inside
-// their ranges, the enum and method names round-trip, and docs/registration.md lists every
-// setting as the table says (default, paper() value, range).
+// Tests of the settings tables (settings.hpp; the odometry's and the global registration's):
+// every range is enforced by validate() with a message naming the setting as spelled, the
+// defaults and presets lie inside their ranges, the enum and method names round-trip, and
+// docs/registration.md lists every setting as the table says (default, paper() value, range).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <set>
 #include <sstream>
 #include <string>
 #include <string_view>
 
 #include "sgdicp/core/result.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/settings.hpp"
@@ -93,6 +95,7 @@ TEST(SettingsTable, EveryRangeIsEnforcedWithTheSpelledName) {
   check_ranges(sgd_settings_table(), "", {"batch-size", "window"});  // their product is bounded
   check_ranges(batch_settings_table());
   check_ranges(odometry_settings_table(), "", {"min-range"});  // below max-range
+  check_ranges(global_settings_table(), "GlobalSettings.");
 }
 
 TEST(SettingsTable, DefaultsAndPresetsAreValid) {
@@ -104,6 +107,23 @@ TEST(SettingsTable, DefaultsAndPresetsAreValid) {
   EXPECT_NO_THROW(BatchSettings{}.validate());
   EXPECT_NO_THROW(BatchSettings::gicp().validate());
   EXPECT_NO_THROW(OdometrySettings{}.validate());
+  EXPECT_NO_THROW(GlobalSettings{}.validate());
+}
+
+// `register --init global` takes the registration's options and the global ones together, and
+// register(init="global") their keywords: no name may mean both.
+TEST(SettingsTable, GlobalNamesArePrefixedAndUnique) {
+  std::set<std::string_view> names;
+  for (const auto& s : sgd_settings_table()) names.insert(s.name);
+  for (const auto& g : global_settings_table()) {
+    EXPECT_EQ(g.name.rfind("global-", 0), 0U) << g.name;
+    EXPECT_TRUE(names.insert(g.name).second) << g.name;
+    std::string keyword(g.name);
+    std::replace(keyword.begin(), keyword.end(), '-', '_');
+    EXPECT_EQ(find_global_setting(keyword), &g);  // Python's spelling finds it too
+    EXPECT_NE(g.help, "");
+  }
+  EXPECT_EQ(find_global_setting("min-points"), nullptr);
 }
 
 TEST(SettingsTable, NamesAreUniqueAndSharedNamesMeanTheSameRange) {

@@ -9,7 +9,6 @@
 
 #include "global/consensus.hpp"
 #include "global/feature_matching.hpp"
-#include "sgdicp/core/error.hpp"
 #include "sgdicp/core/format_number.hpp"
 #include "sgdicp/global/fpfh.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
@@ -23,10 +22,6 @@ namespace {
 
 constexpr std::size_t kScorePoints = 2000;    // source points that score a hypothesis
 constexpr std::size_t kMaxSourceFactor = 10;  // source grid points at most this x feature_points
-
-void require(bool ok, const std::string& what) {
-  if (!ok) throw InvalidSettingsError("GlobalSettings." + what);
-}
 
 // The spacing of a cloud too small to thin: the median distance to the nearest other point.
 double median_spacing(const ReferenceIndex& index) {
@@ -215,30 +210,6 @@ std::vector<RegistrationResult> race(GlobalEstimate& e, const PointCloud& source
 }
 
 }  // namespace
-
-void GlobalSettings::validate() const {
-  require(feature_points >= 10, "feature_points: must be at least 10");
-  require(normal_neighbors >= 3 && normal_neighbors <= 1000,
-          "normal_neighbors: must be in [3, 1000]");
-  require(std::isfinite(feature_radius_voxels) && feature_radius_voxels > 0.0,
-          "feature_radius_voxels: must be positive");
-  require(std::isfinite(inlier_distance_voxels) && inlier_distance_voxels > 0.0,
-          "inlier_distance_voxels: must be positive");
-  require(max_iterations >= 1 && max_iterations <= 100'000'000,
-          "max_iterations: must be in [1, 1e8]");
-  require(confidence > 0.0 && confidence < 1.0, "confidence: must be in (0, 1)");
-  require(hypotheses >= 1 && hypotheses <= 1000, "hypotheses: must be in [1, 1000]");
-  require(refined_hypotheses >= 1, "refined_hypotheses: must be at least 1");
-  require(std::isfinite(fine_distance_voxels) && fine_distance_voxels > 0.0,
-          "fine_distance_voxels: must be positive");
-  require(std::isfinite(distinct_rotation_deg) && distinct_rotation_deg >= 0.0,
-          "distinct_rotation_deg: must be >= 0");
-  require(std::isfinite(distinct_translation_voxels) && distinct_translation_voxels >= 0.0,
-          "distinct_translation_voxels: must be >= 0");
-  require(ambiguity_ratio > 0.0 && ambiguity_ratio <= 1.0, "ambiguity_ratio: must be in (0, 1]");
-  require(min_score >= 0.0 && min_score <= 1.0, "min_score: must be in [0, 1]");
-  require(min_points >= 3, "min_points: must be at least 3");
-}
 
 GlobalEstimate estimate_global(const PointCloud& source, const ReferenceIndex& reference,
                                const GlobalSettings& global, std::uint64_t seed) {

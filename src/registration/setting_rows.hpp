@@ -1,6 +1,6 @@
 #pragma once
 // How a settings table (settings.hpp's Setting<S>) is made and read, for every table: the SGD and
-// batch solvers' (settings_table.cpp) and the odometry's. A row is
+// batch solvers' (settings_table.cpp), the odometry's and the global registration's. A row is
 // built from its member path alone (its kind, get and set follow from the member's type);
 // check_table and find_in are the validation and the look-up by name that each table's struct
 // uses.

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -51,9 +52,19 @@ struct GlobalSettings {
   /// Fewer feature-grid points than this in either cloud: no solution is attempted.
   std::size_t min_points = 30;
 
-  /// Throws InvalidSettingsError naming the first setting out of range.
-  void validate() const;
+  /// Throws InvalidSettingsError naming the first setting out of range (global_settings_table),
+  /// spelled as `names` says (field: "GlobalSettings.confidence", as SgdSettings has members of
+  /// the same names).
+  void validate(SettingNames names = SettingNames::field) const;
 };
+
+/// Every setting of GlobalSettings (settings.hpp's Setting rows), named with the prefix "global-"
+/// so that they stand beside the registration's: the CLI's options of `register --init global`
+/// (--global-feature-points), the Python keywords of register(init="global")
+/// (global_feature_points=), docs/global.md's table; with range, unit and help.
+[[nodiscard]] const std::vector<Setting<GlobalSettings>>& global_settings_table();
+/// The setting called `name` ('_' may stand for '-'), or nullptr.
+[[nodiscard]] const Setting<GlobalSettings>* find_global_setting(std::string_view name);
 
 /// One pose explaining the correspondences, with its support.
 struct GlobalHypothesis {

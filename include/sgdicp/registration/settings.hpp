@@ -5,8 +5,8 @@
 // checks the ranges of this table, the CLI builds its options from it, the Python keyword
 // overrides apply through it, and the settings table of docs/registration.md is tested against
 // it. Defaults are never written in the table: they are read from SgdSettings{},
-// SgdSettings::paper() and BatchSettings{}. The odometry's settings have a table of the same
-// Setting rows (odometry.hpp), read the same way.
+// SgdSettings::paper() and BatchSettings{}. The odometry's and the global registration's settings
+// have tables of the same Setting rows (odometry.hpp, global_registration.hpp), read the same way.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -285,8 +285,8 @@ struct SettingDescription {
   [[nodiscard]] std::string spelled(SettingNames names) const;
 };
 
-/// One row of the table of a settings struct S (SgdSettings, BatchSettings, OdometrySettings): its
-/// description and the access to its member.
+/// One row of the table of a settings struct S (SgdSettings, BatchSettings, OdometrySettings,
+/// GlobalSettings): its description and the access to its member.
 template <typename S>
 struct Setting : SettingDescription {
   SettingValue (*get)(const S&) = nullptr;
