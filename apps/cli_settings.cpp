@@ -271,7 +271,7 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
 }
 
 MethodRun run_method_global(const MethodSpec& m, const PointCloud& source,
-                            const PointCloud& reference) {
+                            const PointCloud& reference, const GlobalSettings& global) {
   if (!m.stochastic || m.random_ratio) {
     throw InvalidSettingsError("--init global: only with an SGD method (--method " + m.name +
                                ") and without --random-ratio");
@@ -281,7 +281,7 @@ MethodRun run_method_global(const MethodSpec& m, const PointCloud& source,
   MethodRun run;
   run.prepare_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  run.result = align_global(source, index, m.sgd);
+  run.result = align_global(source, index, m.sgd, global);
   run.source_points = run.result.source_points;
   run.reference_points = run.result.reference_points;
   return run;

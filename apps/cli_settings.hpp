@@ -2,8 +2,8 @@
 // Options shared by `sgdicp register` and `sgdicp bench`: one per setting of the library's table
 // (settings.hpp), with its unit, range and default taken from the library, so --help and
 // behaviour never disagree; the method table (methods.hpp); and the runner of one method. The
-// commands' other tables (the odometry's) become options the same way (add_table_options,
-// settings_from_options).
+// commands' other tables (the odometry's, the global registration's) become options the same
+// way (add_table_options, settings_from_options).
 #include <map>
 #include <optional>
 #include <string>
@@ -14,6 +14,7 @@
 
 #include "sgdicp/core/point_cloud.hpp"
 #include "sgdicp/core/result.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/settings.hpp"
 
@@ -63,7 +64,7 @@ void apply_option(S& settings, const Setting<S>& s, const SettingValue& value) {
 }
 }  // namespace detail
 
-/// One option --NAME per setting of `table` (OdometrySettings'), its help from
+/// One option --NAME per setting of `table` (OdometrySettings', GlobalSettings'), its help from
 /// the table with the default read from `defaults`; the text given goes to values[NAME]. With a
 /// `group`, --help lists them under that heading.
 template <typename S>
@@ -122,9 +123,10 @@ struct MethodRun {
                                    const PointCloud& reference, const Eigen::Matrix4d& T_init,
                                    bool record_trace = false);
 
-/// run_method without an initial guess (--init global): align_global on the same index. Only
-/// for the SGD methods; throws InvalidSettingsError for a batch method.
+/// run_method without an initial guess (--init global): align_global on the same index, with
+/// `global`. Only for the SGD methods; throws InvalidSettingsError for a batch method.
 [[nodiscard]] MethodRun run_method_global(const MethodSpec& m, const PointCloud& source,
-                                          const PointCloud& reference);
+                                          const PointCloud& reference,
+                                          const GlobalSettings& global);
 
 }  // namespace sgdicp::cli

@@ -32,6 +32,8 @@ struct RegisterOptions {
   std::string samples;
   bool json = false;
   SettingsOptions settings;
+  /// The global registration's options (global_settings_table), only with --init global.
+  OptionValues global;
   DepthOptions depth;
 };
 
@@ -84,6 +86,10 @@ void print_uncertainty(const RegistrationResult& r) {
 // The option checks that need the method: before any file is read.
 void check_options(const RegisterOptions& o, const MethodSpec& method) {
   if (!o.picture.empty()) check_picture_name(o.picture);
+  if (o.init != "global" && !o.global.empty()) {
+    const auto& [name, text] = *o.global.begin();
+    throw InvalidSettingsError("--" + name + " " + text + ": only with --init global");
+  }
   const UncertaintyType uncertainty = method.sgd.uncertainty.method;
   if (!o.samples.empty() && uncertainty != UncertaintyType::sgld &&
       uncertainty != UncertaintyType::svgd) {
@@ -200,6 +206,8 @@ void run(const RegisterOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   check_options(o, method);
   const bool global = o.init == "global";
+  const GlobalSettings global_settings =
+      settings_from_options(GlobalSettings{}, global_settings_table(), o.global);
   const Eigen::Matrix4d T_init = o.init.empty() || global
                                      ? Eigen::Matrix4d::Identity()
                                      : parse_transform_option(o.init, "--init");
@@ -208,7 +216,7 @@ void run(const RegisterOptions& o) {
   const PointCloud source = load_cloud(o.source, "source", !o.json, o.depth);
   const PointCloud reference_cloud = load_cloud(o.reference, "reference", !o.json, o.depth);
   const MethodRun run = global
-                            ? run_method_global(method, source, reference_cloud)
+                            ? run_method_global(method, source, reference_cloud, global_settings)
                             : run_method(method, source, reference_cloud, T_init, !o.trace.empty());
   const RegistrationResult& result = run.result;
   write_outputs(o, source, reference_cloud, result);
@@ -237,8 +245,9 @@ void add_register_command(CLI::App& app) {
   cmd->add_option("--init", o->init,
                   "Initial T_reference_source: a file with a 4x4 or 3x4 row-major matrix, 12/16 "
                   "numbers inline (quoted), or 'global': no initial guess, a global estimate "
-                  "(FPFH features, RANSAC; docs/global.md) then the registration from it; exit "
-                  "status 3 when no reliable global solution exists [default: identity]");
+                  "(FPFH features, RANSAC; docs/global.md; its settings are the --global-* "
+                  "options) then the registration from it; exit status 3 when no reliable "
+                  "global solution exists [default: identity]");
   cmd->add_option("--ground-truth", o->ground_truth,
                   "Ground-truth T_reference_source (file or 12/16 numbers): prints the errors");
   cmd->add_flag("--json", o->json,
@@ -260,6 +269,8 @@ void add_register_command(CLI::App& app) {
       "svgd), one pose vector x y z roll pitch yaw per line (metres, radians)");
   add_method_options(*cmd, o->settings, false);
   add_settings_options(*cmd, o->settings);
+  add_table_options(*cmd, global_settings_table(), GlobalSettings{}, o->global,
+                    "Global registration (only with --init global; docs/global.md)");
   cmd->callback([o] { run(*o); });
 }
 

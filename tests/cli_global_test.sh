@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # End-to-end tests of `sgdicp register --init global`: the bunny turned by 150 deg is solved,
 # the result names its hypotheses and scores, a seeded run repeats, and a plane, a sphere and a
-# handful of points exit with status 3 and "no reliable global solution".
+# handful of points exit with status 3 and "no reliable global solution". The --global-* options
+# (the global settings table): out of range or without --init global they are refused naming the
+# option, --help gives each one's unit and default, and a value given reaches the estimate.
 # Run by CTest with SGDICP_BIN and SGDICP_SHARED_DATA (cli_support.sh, which this sources).
 set -u
 
@@ -26,9 +28,39 @@ done
 expect_error "--init global with a batch method" "--init global: only with an SGD method" \
   register "$tmp/plane.xyz" "$tmp/plane.xyz" --init global --method icp
 check_help_mentions() {
-  if "$BIN" register --help | tr -s ' \n' ' ' | grep -q "$1"; then pass "register --help: $1"; else fail "register --help lacks '$1'"; fi
+  if "$BIN" register --help | tr -s ' \n' ' ' | grep -q -- "$1"; then pass "register --help: $1"; else fail "register --help lacks '$1'"; fi
 }
 check_help_mentions "or 'global'"
+check_help_mentions "--global-feature-points UINT .* points in \[10, 10000000\] \[default: 3000\]"
+check_help_mentions "--global-distinct-rotation FLOAT .* deg in \[0, 180\] \[default: 10\]"
+
+# The global options: refused out of range (naming the option, value and range) or without
+# --init global, before any cloud is read (the files do not exist).
+expect_error "--global-confidence 1" '^sgdicp: error: --global-confidence 1: must be in \(0, 1\)' \
+  register "$tmp/missing.xyz" "$tmp/missing.xyz" --init global --global-confidence 1
+expect_error "--global-feature-radius -2" '--global-feature-radius -2: must be in \(0, 1000\] voxels' \
+  register "$tmp/missing.xyz" "$tmp/missing.xyz" --init global --global-feature-radius -2
+expect_error "--global-min-points 2.5" '--global-min-points 2.5: not a non-negative integer' \
+  register "$tmp/missing.xyz" "$tmp/missing.xyz" --init global --global-min-points 2.5
+expect_error "--global-min-points without --init global" \
+  '^sgdicp: error: --global-min-points 50: only with --init global' \
+  register "$REF" "$REF" --global-min-points 50
+# A value given reaches the estimate: the demo car scans, solved with the defaults, are not with
+# more feature-grid points asked for than they have, and the estimate says so.
+DEMO="${SGDICP_DEMO_DATA:-}"
+if [ -f "$DEMO/car_cloud401.csv" ] && [ -f "$DEMO/car_cloud400.csv" ]; then
+  run register "$DEMO/car_cloud401.csv" "$DEMO/car_cloud400.csv" --init global
+  default_rc=$rc
+  run register "$DEMO/car_cloud401.csv" "$DEMO/car_cloud400.csv" --init global --global-min-points 1000000
+  if [ "$default_rc" -eq 0 ] && [ "$rc" -eq 3 ] &&
+    grep -q "no reliable global solution: .* at least 1000000 each needed" "$tmp/err"; then
+    pass "--global-min-points 1000000: the car scans solved by default exit 3, 1000000 points asked"
+  else
+    fail "--global-min-points 1000000 (exit $rc, default $default_rc): $(head -c 300 "$tmp/err")"
+  fi
+else
+  skip "--global-min-points reaching the estimate: no demo car scans in '${DEMO}'"
+fi
 
 # The bunny's source turned by 150 deg about z through its centroid (an ascii PCD: awk turns it).
 if has_bunny "global on the bunny"; then
