@@ -906,7 +906,9 @@ class BatchSettings:
 
 # The settings table's keywords (keyword, kind, enum class name of a choice) for
 # python/tools/stub_signatures.py, which writes the keyword parameters of this stub from them.
-def _settings_keywords(solver: Literal["sgd", "batch"]) -> list[tuple[str, str, str | None]]: ...
+def _settings_keywords(
+    solver: Literal["sgd", "batch", "odometry", "global"],
+) -> list[tuple[str, str, str | None]]: ...
 
 
 # ---- registration
@@ -1004,13 +1006,28 @@ class ReferenceIndex:
         svgd_spread: float = ...,
         temper: bool = ...,
         block_size: _DistanceValue = ...,
+        global_feature_points: int = ...,
+        global_normal_neighbors: int = ...,
+        global_feature_radius: float = ...,
+        global_inlier_distance: float = ...,
+        global_max_iterations: int = ...,
+        global_confidence: float = ...,
+        global_hypotheses: int = ...,
+        global_distinct_rotation: float = ...,
+        global_distinct_translation: float = ...,
+        global_refined_hypotheses: int = ...,
+        global_fine_distance: float = ...,
+        global_ambiguity_ratio: float = ...,
+        global_min_score: float = ...,
+        global_min_points: int = ...,
     ) -> ReferenceIndex:
         """The index that register(source, points, method=method, settings=settings, **overrides)
         builds for its reference (for a batch method the cost's normals or covariances with the
         settings' neighbourhood), for reuse over many sources with the same arguments: the
         results are the same as passing points each time. points: an array or an Open3D
-        PointCloud, as for register(). Raises the errors of register() for the method, settings
-        and keywords.
+        PointCloud, as for register(). The global_* keywords of init='global' are checked and
+        leave the index as it is. Raises the errors of register() for the method, settings and
+        keywords.
         """
 
     def __len__(self) -> int: ...
@@ -1312,6 +1329,20 @@ def register(
     svgd_spread: float = ...,
     temper: bool = ...,
     block_size: _DistanceValue = ...,
+    global_feature_points: int = ...,
+    global_normal_neighbors: int = ...,
+    global_feature_radius: float = ...,
+    global_inlier_distance: float = ...,
+    global_max_iterations: int = ...,
+    global_confidence: float = ...,
+    global_hypotheses: int = ...,
+    global_distinct_rotation: float = ...,
+    global_distinct_translation: float = ...,
+    global_refined_hypotheses: int = ...,
+    global_fine_distance: float = ...,
+    global_ambiguity_ratio: float = ...,
+    global_min_score: float = ...,
+    global_min_points: int = ...,
 ) -> RegistrationResult:
     """Registers `source` to `reference` with SGD-ICP, or with a batch ICP method.
 
@@ -1385,6 +1416,15 @@ def register(
         particles (32, [1, 10000]), svgd_iterations (50, [1, 1000000]),
         svgd_step (0.05, [0.0001, 10]), svgd_spread (3.0, [0.001, 1000000000]), temper (True),
         block_size (Distance.scaled(0.1)).
+        With init='global' (an error without it), the global estimate's settings, named like the
+        CLI's --global-* options (docs/global.md):
+        global_feature_points (3000, [10, 10000000]), global_normal_neighbors (12, [3, 1000]),
+        global_feature_radius (5.0, (0, 1000]), global_inlier_distance (1.5, (0, 1000]),
+        global_max_iterations (100000, [1, 100000000]), global_confidence (0.999, (0, 1)),
+        global_hypotheses (8, [1, 1000]), global_distinct_rotation (10.0, [0, 180]),
+        global_distinct_translation (3.0, [0, 1000]), global_refined_hypotheses (3, [1, 1000]),
+        global_fine_distance (0.5, (0, 1000]), global_ambiguity_ratio (0.9, (0, 1]),
+        global_min_score (0.05, [0, 1]), global_min_points (30, [3, 10000000]).
         See docs/python.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in
@@ -1397,7 +1437,7 @@ def register(
         init, a ReferenceIndex without the normals or covariances of a batch method's cost (build
         it with ReferenceIndex(points, cost=...); the SGD methods estimate what they use).
     InvalidSettingsError (ValueError)
-        An invalid setting or method name.
+        An invalid setting or method name, or a global_* keyword without init='global'.
     TypeError
         An unknown keyword, a keyword of the other solver, or a value of the wrong type.
     """

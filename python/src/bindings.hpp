@@ -118,8 +118,8 @@ void bind_settings_keywords(py::module_& m);
 [[nodiscard]] BatchSettings with_batch_overrides(BatchSettings base, const py::dict& overrides,
                                                  std::string_view method);
 
-/// `base` with the keywords of `overrides` that name a setting of `table` (the odometry's: no
-/// distances) set in table order and removed from `overrides`, then
+/// `base` with the keywords of `overrides` that name a setting of `table` (the odometry's, the
+/// global registration's: no distances) set in table order and removed from `overrides`, then
 /// validated; the other keywords stay for the registration's settings. Throws TypeError for a
 /// value of the wrong type and InvalidSettingsError (ValueError) for an invalid one, naming the
 /// keyword.
@@ -131,6 +131,9 @@ template <typename S>
 /// classes bound.
 [[nodiscard]] std::string keyword_summary(const py::module_& core, Solver solver,
                                           std::string_view indent);
+/// The same for the keywords of register(init='global') (global_settings_table), their defaults
+/// read from GlobalSettings{}.
+[[nodiscard]] std::string global_keyword_summary(std::string_view indent);
 
 // ---- reference indexes (reference_index.cpp)
 
@@ -213,7 +216,7 @@ struct ReferenceNeeds {
 /// What the reference index that register() builds for an array reference holds, for the same
 /// method, settings and overrides.
 [[nodiscard]] ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
-                                             const py::kwargs& overrides);
+                                             const py::dict& overrides);
 
 /// Binds register (its docstring lists the keywords of the settings table: after bind_settings).
 void bind_registration(py::module_& m);

@@ -1,7 +1,7 @@
 // Python values as settings: the typed parsing of Python values (bindings.hpp) and the flat
 // keyword overrides shared by Settings(...), Settings.paper(...), Settings.replace(...),
 // BatchSettings(...) and register(...), named after the library's settings table; the same for
-// the odometry's table (take_keywords).
+// the odometry's and the global registration's tables (take_keywords).
 #include <algorithm>
 #include <array>
 #include <optional>
@@ -14,6 +14,7 @@
 
 #include "bindings.hpp"
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 
@@ -159,6 +160,12 @@ std::string keyword_list(const std::vector<Setting<S>>& table) {
   for (const auto& [alias, keyword] : kSuggestions) {
     if (name == alias) message += " (did you mean '" + std::string(keyword) + "'?)";
   }
+  if (name.starts_with("global")) {
+    message.append("; the keywords of register(init='global') are: ");
+    for (const auto& s : global_settings_table()) {
+      message.append(&s == &global_settings_table().front() ? "" : ", ").append(keyword_of(s.name));
+    }
+  }
   throw py::type_error(message +
                        "; the keyword settings are: " + keyword_list(sgd_settings_table()));
 }
@@ -287,6 +294,8 @@ S take_keywords(S base, py::dict& overrides, const std::vector<Setting<S>>& tabl
 
 template OdometrySettings take_keywords(OdometrySettings, py::dict&,
                                         const std::vector<Setting<OdometrySettings>>&);
+template GlobalSettings take_keywords(GlobalSettings, py::dict&,
+                                      const std::vector<Setting<GlobalSettings>>&);
 
 BatchSettings with_batch_overrides(BatchSettings s, const py::dict& overrides,
                                    std::string_view method) {

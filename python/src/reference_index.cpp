@@ -93,8 +93,9 @@ void bind_reference_index(py::module_& m) {
           "**overrides) builds for its reference (for a batch method the cost's normals or "
           "covariances with the settings' neighbourhood), for reuse over many sources with the "
           "same arguments: the results are the same as passing points each time. points: an "
-          "array or an Open3D PointCloud, as for register(). Raises the errors of register() for "
-          "the method, settings and keywords.")
+          "array or an Open3D PointCloud, as for register(). The global_* keywords of "
+          "init='global' are checked and leave the index as it is. Raises the errors of "
+          "register() for the method, settings and keywords.")
       .def("__len__", [](const SharedIndex& s) { return s.index.size(); })
       .def_property_readonly(
           "points",

@@ -86,24 +86,37 @@ Result register_with(const ConvertedCloud& src, const py::handle& reference,
 
 /// The settings of a method with the user's settings object and keyword overrides.
 SgdSettings sgd_settings_of(const Method& m, const py::handle& settings,
-                            const py::kwargs& overrides) {
+                            const py::dict& overrides) {
   SgdSettings base = settings_or_default(settings, m);
   BatchSettings unused;
   apply_method_cost(m, base, unused);
   return with_overrides(base, overrides);
 }
 BatchSettings batch_settings_of(const Method& m, const py::handle& settings,
-                                const py::kwargs& overrides) {
+                                const py::dict& overrides) {
   BatchSettings base = batch_settings_or_default(settings, m);
   base.cost = *m.cost;
   return with_batch_overrides(base, overrides, std::string(m.name));
 }
 
+/// The global registration's keywords (global_settings_table) taken out of `overrides`; given
+/// without init='global', an error.
+GlobalSettings take_global_keywords(py::dict& overrides, bool global) {
+  for (const auto& s : global_settings_table()) {
+    const std::string keyword = keyword_of(s.name);
+    if (!global && overrides.contains(keyword)) {
+      throw InvalidSettingsError(keyword + "=" + std::string(py::repr(overrides[keyword.c_str()])) +
+                                 ": only with init='global'");
+    }
+  }
+  return take_keywords(GlobalSettings{}, overrides, global_settings_table());
+}
+
 Result register_clouds(const py::handle& source, const py::handle& reference,
                        const py::handle& init, const py::handle& settings, const py::handle& method,
-                       const py::kwargs& overrides) {
+                       const py::kwargs& kwargs) {
   const Method& m = method_from_object(method);
-  if (m.cost && overrides.contains("cost")) {
+  if (m.cost && kwargs.contains("cost")) {
     throw InvalidSettingsError("method='" + std::string(m.name) +
                                "' sets the cost; drop cost= (or use method='sgd' with cost=)");
   }
@@ -116,6 +129,8 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
     throw InvalidSettingsError("init='global': only with an SGD method (method='" +
                                std::string(m.name) + "')");
   }
+  py::dict overrides = kwargs.attr("copy")();
+  const GlobalSettings global_settings = take_global_keywords(overrides, global);
   const auto T_init = [&] {
     return init.is_none() ? Eigen::Matrix4d::Identity().eval() : matrix_from_array(init, "init");
   };
@@ -123,7 +138,7 @@ Result register_clouds(const py::handle& source, const py::handle& reference,
     const SgdSettings s = sgd_settings_of(m, settings, overrides);
     const ConvertedCloud src = cloud_from_array(source, "source", NonFinite::drop);
     return register_with(src, reference, needs_of(s, false), [&](const ReferenceIndex& index) {
-      return align_global(src.cloud, index, s);
+      return align_global(src.cloud, index, s, global_settings);
     });
   }
   if (m.solver == Solver::sgd) {
@@ -186,6 +201,9 @@ method : str, default 'sgd'
 @BATCH@.
     For the SGD methods:
 @SGD@.
+    With init='global' (an error without it), the global estimate's settings, named like the
+    CLI's --global-* options (docs/global.md):
+@GLOBAL@.
     See docs/python.md for the settings each one sets.
 
 The GIL is released during the registration (and the KD-tree build), so registrations in
@@ -198,7 +216,7 @@ InvalidInputError (ValueError)
     init, a ReferenceIndex without the normals or covariances of a batch method's cost (build
     it with ReferenceIndex(points, cost=...); the SGD methods estimate what they use).
 InvalidSettingsError (ValueError)
-    An invalid setting or method name.
+    An invalid setting or method name, or a global_* keyword without init='global'.
 TypeError
     An unknown keyword, a keyword of the other solver, or a value of the wrong type.
 )doc";
@@ -211,6 +229,7 @@ std::string register_doc(const py::module_& m) {
   };
   fill("@BATCH@", keyword_summary(m, Solver::batch, "    "));
   fill("@SGD@", keyword_summary(m, Solver::sgd, "    "));
+  fill("@GLOBAL@", global_keyword_summary("    "));
   return doc;
 }
 
@@ -219,9 +238,12 @@ std::string register_doc(const py::module_& m) {
 /// What the reference index that register_clouds builds for an array reference holds, for the
 /// same method, settings and overrides.
 ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
-                               const py::kwargs& overrides) {
-  if (m.solver == Solver::sgd) return needs_of(sgd_settings_of(m, settings, overrides), false);
-  return needs_of(batch_settings_of(m, settings, overrides), true);
+                               const py::dict& overrides) {
+  // The global keywords do not change the index: checked, then left out.
+  py::dict rest = overrides.attr("copy")();
+  (void)take_global_keywords(rest, true);
+  if (m.solver == Solver::sgd) return needs_of(sgd_settings_of(m, settings, rest), false);
+  return needs_of(batch_settings_of(m, settings, rest), true);
 }
 
 void bind_registration(py::module_& m) {

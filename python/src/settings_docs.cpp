@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 
@@ -116,15 +117,15 @@ void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, c
   }
 }
 
-template <typename S>
-std::string summary_of(const std::vector<Setting<S>>& table, const py::object& defaults,
+// "keyword (default, range), ..." wrapped at 96 columns; default_of(s) is a setting's default
+// as Python writes it.
+template <typename S, typename DefaultOf>
+std::string summary_of(const std::vector<Setting<S>>& table, const DefaultOf& default_of,
                        std::string_view indent) {
   std::string out;
   std::string line(indent);
   for (const auto& s : table) {
-    const std::string doc = attribute_doc(s, defaults);
-    const std::string value = doc.substr(doc.rfind("Default ") + 8, std::string::npos);
-    std::string item = keyword_of(s.name) + " (" + value.substr(0, value.size() - 1);
+    std::string item = keyword_of(s.name) + " (" + default_of(s);
     if (s.kind == SettingKind::count || s.kind == SettingKind::real) {
       item += ", " + s.range.to_string();
     }
@@ -179,10 +180,30 @@ py::list keyword_rows(const std::vector<Setting<S>>& table, const py::object& de
 }  // namespace
 
 std::string keyword_summary(const py::module_& core, Solver solver, std::string_view indent) {
+  // The default as the attribute's docstring says it ("Default X.").
+  const auto from_doc = [](const py::object& defaults) {
+    return [defaults](const auto& s) {
+      const std::string doc = attribute_doc(s, defaults);
+      const std::string value = doc.substr(doc.rfind("Default ") + 8);
+      return value.substr(0, value.size() - 1);
+    };
+  };
   if (solver == Solver::sgd) {
-    return summary_of(sgd_settings_table(), core.attr("Settings")(), indent);
+    return summary_of(sgd_settings_table(), from_doc(core.attr("Settings")()), indent);
   }
-  return summary_of(batch_settings_table(), core.attr("BatchSettings")(), indent);
+  return summary_of(batch_settings_table(), from_doc(core.attr("BatchSettings")()), indent);
+}
+
+std::string global_keyword_summary(std::string_view indent) {
+  return summary_of(
+      global_settings_table(),
+      [](const Setting<GlobalSettings>& s) {
+        const SettingValue v = s.get(GlobalSettings{});
+        if (const auto* real = std::get_if<double>(&v))
+          return std::string(py::repr(py::float_(*real)));
+        return format_value(v);
+      },
+      indent);
 }
 
 void document_settings(py::module_& m) {
@@ -197,16 +218,17 @@ void bind_settings_keywords(py::module_& m) {
         if (solver == "sgd")
           return keyword_rows(sgd_settings_table(), py::type::of<SgdSettings>()());
         if (solver == "odometry") return keyword_rows(odometry_settings_table(), py::none());
+        if (solver == "global") return keyword_rows(global_settings_table(), py::none());
         if (solver != "batch") {
-          throw py::value_error("solver must be 'sgd', 'batch' or 'odometry'");
+          throw py::value_error("solver must be 'sgd', 'batch', 'odometry' or 'global'");
         }
         return keyword_rows(batch_settings_table(), py::type::of<BatchSettings>()());
       },
       py::arg("solver"),
       "The keywords of Settings(**overrides) (solver 'sgd'), BatchSettings(**overrides) "
-      "('batch') or Odometry's own ('odometry') as (keyword, kind, enum class name or None) in "
-      "the table's order; kind is 'count', 'real', 'flag', 'distance' or 'choice'. Read by "
-      "python/tools/stub_signatures.py.");
+      "('batch'), Odometry's own ('odometry') or register(init='global')'s ('global') as "
+      "(keyword, kind, enum class name or None) in the table's order; kind is 'count', 'real', "
+      "'flag', 'distance' or 'choice'. Read by python/tools/stub_signatures.py.");
 }
 
 }  // namespace sgdicp::python

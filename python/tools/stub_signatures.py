@@ -2,8 +2,10 @@
 
 Settings(**overrides), Settings.paper, Settings.replace, BatchSettings(**overrides) and its
 constructors, register() and ReferenceIndex.for_registration() take the flat keyword settings of
-the library's settings table (include/sgdicp/registration/settings.hpp); Odometry() takes the
-odometry's table's (include/sgdicp/odometry/odometry.hpp) and the registration's. The stub spells each one
+the library's settings table (include/sgdicp/registration/settings.hpp), the last two also those
+of the global registration's table (include/sgdicp/global/global_registration.hpp, the global_*
+keywords of init="global"); Odometry() takes the odometry's table's
+(include/sgdicp/odometry/odometry.hpp) and the registration's. The stub spells each one
 out, so that type checkers and IDEs know them; this module writes those parameters from
 _core._settings_keywords(), the table as the module reads it: one `keyword: type = ...` per
 setting, in table order, typed by its kind (count int, real float, flag bool, distance
@@ -24,7 +26,8 @@ import re
 from types import ModuleType
 
 # The functions whose **overrides are the flat setting keywords, and the tables they take:
-# register() and for_registration() take either solver's, as the method says.
+# register() and for_registration() take either solver's, as the method says, and the global
+# registration's (init="global"; for_registration checks and ignores them).
 SIGNATURES: dict[str, tuple[str, ...]] = {
     "Settings.__init__": ("sgd",),
     "Settings.paper": ("sgd",),
@@ -34,8 +37,8 @@ SIGNATURES: dict[str, tuple[str, ...]] = {
     "BatchSettings.icp_plane": ("batch",),
     "BatchSettings.gicp": ("batch",),
     "BatchSettings.replace": ("batch",),
-    "register": ("sgd", "batch"),
-    "ReferenceIndex.for_registration": ("sgd", "batch"),
+    "register": ("sgd", "batch", "global"),
+    "ReferenceIndex.for_registration": ("sgd", "batch", "global"),
     "Odometry.__init__": ("odometry", "sgd", "batch"),
 }
 # Keywords of those tables a function refuses: the odometry thins on its own grid (voxel_size=,

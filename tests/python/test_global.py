@@ -1,10 +1,12 @@
 """register(init="global"): no initial guess (docs/global.md). The car scans turned by 150 deg
 are solved, Python and the CLI give the same result, a plane gives no reliable solution, and
-wrong uses are refused."""
+wrong uses are refused. The global_* keywords (the global settings table, the CLI's --global-*
+options) reach the estimate, and a wrong one is refused naming it."""
 
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 
 import numpy as np
@@ -80,3 +82,63 @@ def test_wrong_uses_are_refused(scene):
         sgd_icp.register(source, reference, init="globl")
     with pytest.raises(sgd_icp.InvalidSettingsError, match="only with an SGD method"):
         sgd_icp.register(source, reference, init="global", method="icp")
+
+
+# ---- the global_* keywords: the global settings table, as the CLI's --global-* options
+
+
+def test_global_keywords_reach_the_estimate():
+    reference = synthetic_scene(3, 20000)
+    source = transformed(synthetic_scene(4, 20000), T_TURN)
+    assert sgd_icp.register(source, reference, init="global").global_reliable
+    # More feature-grid points asked for than the clouds have: the estimate stops, and says why.
+    r = sgd_icp.register(source, reference, init="global", global_min_points=1_000_000)
+    assert not r.global_reliable
+    assert "at least 1000000 each needed" in r.message, r.message
+
+
+@pytest.mark.parametrize(
+    "keywords, error, match",
+    [
+        ({"global_confidence": 1.0}, sgd_icp.InvalidSettingsError,
+         r"^global_confidence=1: must be in \(0, 1\)$"),
+        ({"global_feature_radius": -2}, sgd_icp.InvalidSettingsError,
+         r"^global_feature_radius=-2: must be in \(0, 1000\] voxels$"),
+        ({"global_min_points": -1}, sgd_icp.InvalidSettingsError, "global_min_points must be >= 0"),
+        ({"global_min_points": 1.5}, TypeError, "global_min_points must be an integer, got float"),
+        ({"global_min_point": 50}, TypeError,
+         r"unknown setting 'global_min_point'; the keywords of register\(init='global'\) are: "
+         r"global_feature_points, .*global_min_points"),
+    ],
+)
+def test_global_keyword_errors_name_the_keyword(scene, keywords, error, match):
+    source, reference, _ = scene
+    with pytest.raises(error, match=match):
+        sgd_icp.register(source, reference, init="global", **keywords)
+
+
+def test_global_keywords_need_init_global(scene):
+    source, reference, _ = scene
+    with pytest.raises(sgd_icp.InvalidSettingsError,
+                       match=r"^global_min_points=50: only with init='global'$"):
+        sgd_icp.register(source, reference, global_min_points=50)
+    # An index for a global registration: the keywords are checked and change nothing.
+    index = sgd_icp.ReferenceIndex.for_registration(reference, global_min_points=50)
+    assert len(index) == len(sgd_icp.ReferenceIndex.for_registration(reference))
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="global_min_points=2"):
+        sgd_icp.ReferenceIndex.for_registration(reference, global_min_points=2)
+
+
+def test_global_keywords_are_the_cli_options_and_documented():
+    keywords = [k for k, _, _ in sgd_icp._core._settings_keywords("global")]
+    assert keywords[0] == "global_feature_points" and "global_min_points" in keywords
+    doc = sgd_icp.register.__doc__
+    assert "global_feature_points (3000, [10, 10000000])" in doc
+    assert "global_feature_radius (5.0, (0, 1000])" in doc
+    cli = find_cli()
+    if cli is None:
+        pytest.skip("sgdicp CLI not found (set SGDICP_BIN or build it with scripts/build.sh)")
+    help_text = subprocess.run([str(cli), "register", "--help"], capture_output=True, text=True,
+                               timeout=60, check=True).stdout
+    options = re.findall(r"--(global-[a-z-]+)", help_text)
+    assert sorted(set(options)) == sorted(k.replace("_", "-") for k in keywords)
