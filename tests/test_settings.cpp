@@ -1,7 +1,8 @@
 // Tests of the settings tables (settings.hpp; the odometry's and the global registration's):
 // every range is enforced by validate() with a message naming the setting as spelled, the
 // defaults and presets lie inside their ranges, the enum and method names round-trip, and
-// docs/registration.md lists every setting as the table says (default, paper() value, range).
+// docs/registration.md and docs/global.md list every setting as the tables say (default, paper()
+// value, range).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -212,9 +213,9 @@ TEST(Methods, NamesMapToSolverAndCost) {
   EXPECT_THROW((void)method_from_string("icp2"), InvalidSettingsError);
 }
 
-// ---- docs/registration.md against the table
+// ---- docs/registration.md and docs/global.md against the tables
 
-std::string range_text(const Setting<SgdSettings>& s) {
+std::string range_text(const SettingDescription& s) {
   if (s.kind == SettingKind::distance) {
     return s.range.to_string() + " scaled, " + s.metres_range.to_string() + " m";
   }
@@ -227,31 +228,64 @@ std::string range_text(const Setting<SgdSettings>& s) {
   return s.range.to_string() + (s.unit.empty() ? "" : " " + std::string(s.unit));
 }
 
-// The row of docs/registration.md's settings table for one setting.
-std::string doc_row(const Setting<SgdSettings>& s) {
+// The first columns of a docs table's row: the C++ member, the CLI option, the Python keyword.
+std::string names_columns(const SettingDescription& s) {
   std::string keyword(s.name);
   for (char& c : keyword) c = c == '-' ? '_' : c;
   const std::string cli = s.keyword_only ? "–" : "`--" + std::string(s.name) + "`";
-  const auto* batch = find_batch_setting(s.name);
-  const std::string batch_default = batch ? format_value(batch->get(BatchSettings{})) : "–";
-  return "| `" + std::string(s.field) + "` | " + cli + " | `" + keyword + "` | " +
-         format_value(s.get(SgdSettings{})) + " | " + format_value(s.get(SgdSettings::paper())) +
-         " | " + batch_default + " | " + range_text(s) + " |";
+  return "| `" + std::string(s.field) + "` | " + cli + " | `" + keyword + "` |";
 }
 
-TEST(SettingsDocs, RegistrationMdListsEverySettingAsTheTableSays) {
-  std::ifstream in(std::string(SGDICP_SOURCE_DIR) + "/docs/registration.md");
-  ASSERT_TRUE(in) << "docs/registration.md not found";
+// The row of docs/registration.md's settings table for one setting.
+std::string doc_row(const Setting<SgdSettings>& s) {
+  const auto* batch = find_batch_setting(s.name);
+  const std::string batch_default = batch ? format_value(batch->get(BatchSettings{})) : "–";
+  return names_columns(s) + " " + format_value(s.get(SgdSettings{})) + " | " +
+         format_value(s.get(SgdSettings::paper())) + " | " + batch_default + " | " + range_text(s) +
+         " |";
+}
+
+// The row of docs/global.md's settings table for one setting.
+std::string doc_row(const Setting<GlobalSettings>& s) {
+  return names_columns(s) + " " + format_value(s.get(GlobalSettings{})) + " | " + range_text(s) +
+         " |";
+}
+
+std::string read_doc(const std::string& name) {
+  std::ifstream in(std::string(SGDICP_SOURCE_DIR) + "/docs/" + name);
+  EXPECT_TRUE(in) << "docs/" << name << " not found";
   std::stringstream text;
   text << in.rdbuf();
-  const std::string doc = text.str();
+  return text.str();
+}
+
+// The rows of `table` that `doc` lacks (each row followed by its meaning column).
+template <typename S>
+std::string missing_rows(const std::string& doc, const std::vector<Setting<S>>& table) {
   std::string missing;
-  for (const auto& s : sgd_settings_table()) {
+  for (const auto& s : table) {
     const std::string row = doc_row(s);
     if (doc.find(row + " ") == std::string::npos) missing += row + " ...\n";
   }
-  EXPECT_EQ(missing, "") << "rows of docs/registration.md to update (keep the meaning column):\n"
-                         << missing;
+  return missing;
+}
+
+TEST(SettingsDocs, RegistrationMdListsEverySettingAsTheTableSays) {
+  EXPECT_EQ(missing_rows(read_doc("registration.md"), sgd_settings_table()), "")
+      << "rows of docs/registration.md to update (keep the meaning column)";
+}
+
+TEST(SettingsDocs, GlobalMdListsEverySettingAsTheTableSaysAndNoOther) {
+  const std::string doc = read_doc("global.md");
+  EXPECT_EQ(missing_rows(doc, global_settings_table()), "")
+      << "rows of docs/global.md to update (keep the meaning column)";
+  // No row of a setting the table does not have (a removed or renamed one).
+  std::size_t rows = 0;
+  for (std::size_t at = doc.find("` | `--global-"); at != std::string::npos;
+       at = doc.find("` | `--global-", at + 1)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, global_settings_table().size());
 }
 
 }  // namespace
