@@ -4,13 +4,15 @@
 // into the first frame's coordinates). The parts, after KISS-ICP (Vizzo et al., RA-L 2023):
 //   - a local VoxelMap (voxel_map.hpp), bounded in points per voxel and in radius around the
 //     sensor, updated incrementally;
-//   - a constant-velocity prediction (the last frame-to-frame motion repeated) as initial guess;
+//   - a prediction from the last frame-to-frame motion, with the share of its rotation and of
+//     its translation that carried over between the registered frames (MotionModel);
 //   - a correspondence threshold adapted to the observed deviation of the registrations from
 //     the prediction (AdaptiveThreshold), measured at the frame's own range;
 //   - any method of methods.hpp (SGD-ICP by default) as the registration step.
 // A registration is judged before its pose is taken (converged, within the bounds per frame,
 // an overlap with the map like the frames before); one that fails is retried from the last
-// good pose and then with SGD-ICP's wide basin. A frame no start registers is lost: it gets the
+// good pose, with SGD-ICP's wide basin (confirmed by the global registration) and with no guess
+// (the global registration). A frame no start registers is lost: it gets the
 // predicted pose and touches neither the map nor the motion model. docs/odometry.md.
 #include <array>
 #include <cstddef>
