@@ -1706,7 +1706,7 @@ class FrameReport:
         """(4, 4) float64 pose of the frame in the first frame's coordinates."""
     @property
     def failed(self) -> bool:
-        """True if the frame is lost: no start registered it, the pose is the constant-velocity
+        """True if the frame is lost: no start registered it, the pose is the motion model's
         prediction (see message), and neither the map nor the motion model took it in.
         """
     @property
@@ -1758,8 +1758,8 @@ class FrameReport:
 
 class Odometry:
     """Scan-to-map odometry: frames (points in their sensor frame) registered one at a time to a
-    local voxel map, from a constant-velocity prediction, with an adaptive correspondence
-    threshold (docs/odometry.md).
+    local voxel map, from the last motion's share that carried over between frames, with an
+    adaptive correspondence threshold (docs/odometry.md).
     """
 
     def __init__(

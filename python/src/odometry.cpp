@@ -80,7 +80,7 @@ void bind_odometry(py::module_& m) {
           "(4, 4) float64 pose of the frame in the first frame's coordinates.")
       .def_readonly("failed", &FrameReport::failed,
                     "True if the frame is lost: no start registered it, the pose is the "
-                    "constant-velocity prediction (see message), and neither the map nor the "
+                    "motion model's prediction (see message), and neither the map nor the "
                     "motion model took it in.")
       .def_readonly("recovered", &FrameReport::recovered,
                     "True if a retry registered the frame after the registration from the "
@@ -124,8 +124,9 @@ void bind_odometry(py::module_& m) {
   }
   py::class_<Odometry>(m, "Odometry",
                        "Scan-to-map odometry: frames (points in their sensor frame) registered one "
-                       "at a time to a local voxel map, from a constant-velocity prediction, with "
-                       "an adaptive correspondence threshold (docs/odometry.md).")
+                       "at a time to a local voxel map, from the last motion's share that carried "
+                       "over between frames, with an adaptive correspondence threshold "
+                       "(docs/odometry.md).")
       .def(py::init([](const std::string& method, const py::kwargs& kwargs) {
              return make_odometry(method, kwargs);
            }),
