@@ -7,6 +7,7 @@
 
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/global/global_registration.hpp"
+#include "sgdicp/metrics/metrics.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/evaluation.hpp"
@@ -351,10 +352,10 @@ Odometry::Attempt Odometry::attempt(const PointCloud& source, const ReferenceInd
 // few degrees and two map voxels ("" = confirmed).
 std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) const {
   if (!global.why.empty()) return "the global registration does not confirm it: " + global.why;
-  const Eigen::Matrix4d d =
-      rigid_inverse(global.result.T_reference_source) * wide.result.T_reference_source;
-  const double turn_deg = rotation_angle_rad(d) * 180.0 / std::numbers::pi;
-  const double shift_m = d.topRightCorner<3, 1>().norm();
+  const Eigen::Matrix4d& T_global = global.result.T_reference_source;
+  const Eigen::Matrix4d& T_wide = wide.result.T_reference_source;
+  const double turn_deg = rotation_error_geodesic(T_wide, T_global) * 180.0 / std::numbers::pi;
+  const double shift_m = translation_error(T_wide, T_global);
   if (turn_deg <= kConfirmDeg && shift_m <= kConfirmVoxels * voxel_size_m_) return "";
   return "the global registration ends " + format_number(turn_deg) + " deg and " +
          format_number(shift_m) + " m from it";
