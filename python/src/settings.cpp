@@ -82,25 +82,32 @@ void def_flag(py::class_<Class>& c, const char* name, bool Class::*member, const
 }
 
 // The same for a member of a group (SgdSettings::sampling.batch_size), which Python keeps as a
-// flat attribute of the settings class (settings_docs.cpp, python_attribute).
+// flat attribute of the settings class (settings_docs.cpp, python_attribute); `convert` turns the
+// Python value into the member's type, naming the attribute in its error.
+template <typename Class, typename Group, typename Field, typename Convert>
+void def_group_member(py::class_<Class>& c, const char* name, Group Class::*group,
+                      Field Group::*member, const char* doc, Convert convert) {
+  c.def_property(
+      name, [group, member](const Class& s) { return s.*group.*member; },
+      [group, member, name, convert](Class& s, const py::handle& v) {
+        s.*group.*member = convert(v, name);
+      },
+      doc);
+}
+
 template <typename Class, typename Group, typename Field>
 void def_count(py::class_<Class>& c, const char* name, Group Class::*group, Field Group::*member,
                const char* doc) {
-  c.def_property(
-      name, [group, member](const Class& s) { return s.*group.*member; },
-      [group, member, name](Class& s, const py::handle& v) {
-        s.*group.*member = static_cast<Field>(as_count(v, name));
-      },
-      doc);
+  def_group_member(c, name, group, member, doc, [](const py::handle& v, const char* n) {
+    return static_cast<Field>(as_count(v, n));
+  });
 }
 
 template <typename Class, typename Group>
 void def_flag(py::class_<Class>& c, const char* name, Group Class::*group, bool Group::*member,
               const char* doc) {
-  c.def_property(
-      name, [group, member](const Class& s) { return s.*group.*member; },
-      [group, member, name](Class& s, const py::handle& v) { s.*group.*member = as_bool(v, name); },
-      doc);
+  def_group_member(c, name, group, member, doc,
+                   [](const py::handle& v, const char* n) { return as_bool(v, n); });
 }
 
 template <typename Class, typename Group>
@@ -114,12 +121,8 @@ void def_real(py::class_<Class>& c, const char* name, Group Class::*group, doubl
 template <typename Class, typename Group, typename Enum>
 void def_enum(py::class_<Class>& c, const char* name, Group Class::*group, Enum Group::*member,
               const char* doc) {
-  c.def_property(
-      name, [group, member](const Class& s) { return s.*group.*member; },
-      [group, member, name](Class& s, const py::handle& v) {
-        s.*group.*member = enum_from_object<Enum>(v, name);
-      },
-      doc);
+  def_group_member(c, name, group, member, doc,
+                   [](const py::handle& v, const char* n) { return enum_from_object<Enum>(v, n); });
 }
 
 // voxel_size_m and downsample_to, the downsampling group both settings classes have
