@@ -3,12 +3,14 @@
 // the inputs with no reliable solution (too few points, a plane, a sphere).
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "global/feature_matching.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/global/fpfh.hpp"
 #include "sgdicp/global/global_registration.hpp"
@@ -142,6 +144,63 @@ TEST(GlobalRealData, TurnedBunnyAndCarAreSolved) {
       // The bunny (15 cm): 1 % of the object; the car scans: 5 cm.
       expect_solved(p, std::string(name).find("bunny") != std::string::npos ? 0.002 : 0.05);
     }
+  }
+}
+
+// A descriptor shaped like an FPFH: three histograms of 11 bins, each summing to 1.
+Fpfh random_descriptor(std::mt19937_64& rng) {
+  std::uniform_real_distribution<float> u(0.0F, 1.0F);
+  Fpfh h{};
+  for (std::size_t part = 0; part < 3; ++part) {
+    float sum = 0.0F;
+    for (std::size_t b = 0; b < 11; ++b) sum += h[part * 11 + b] = u(rng) * u(rng);
+    for (std::size_t b = 0; b < 11; ++b) h[part * 11 + b] /= sum;
+  }
+  return h;
+}
+
+double feature_distance2(const Fpfh& a, const Fpfh& b) {
+  double d2 = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) d2 += (double(a[k]) - b[k]) * (double(a[k]) - b[k]);
+  return d2;
+}
+
+// The reference holds noisy copies of 300 of the 400 source descriptors among 200 others.
+// Exhaustively, every source descriptor's match is its nearest (brute force in double); both the
+// exhaustive and the KD-tree search pair each copy with its original, mutually.
+TEST(FeatureMatching, ExhaustiveMatchesAreTheNearestAndTreesFindTheSameCopies) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<float> noise(0.0F, 0.002F);
+  std::vector<Fpfh> source(400);
+  for (Fpfh& f : source) f = random_descriptor(rng);
+  source[17] = Fpfh{};  // no surface: takes no part
+  std::vector<Fpfh> reference;
+  std::vector<std::uint32_t> original;
+  for (std::uint32_t i = 0; i < 300; ++i) {
+    Fpfh copy = source[i + 50];
+    for (float& v : copy) v = std::max(0.0F, v + noise(rng));
+    reference.push_back(copy);
+    original.push_back(i + 50);
+    reference.push_back(random_descriptor(rng));
+    original.push_back(UINT32_MAX);
+  }
+  const auto exhaustive = detail::match_features(source, reference, 3);
+  const auto by_trees = detail::match_features(source, reference, 3, 0);
+  for (const auto* matches : {&exhaustive, &by_trees}) {
+    std::size_t copies = 0;
+    for (const auto& [i, j] : *matches) {
+      ASSERT_NE(i, 17U);
+      if (original[j] == i) ++copies;
+    }
+    EXPECT_EQ(copies, 300U);
+    EXPECT_LE(matches->size(), 400U - 1U);
+  }
+  const auto all = detail::match_features(source, reference, 1000);  // too few mutual: all
+  ASSERT_EQ(all.size(), 399U);
+  for (const auto& [i, j] : all) {
+    double best = std::numeric_limits<double>::max();
+    for (const Fpfh& r : reference) best = std::min(best, feature_distance2(source[i], r));
+    EXPECT_LE(feature_distance2(source[i], reference[j]), best + 1e-6) << "source " << i;
   }
 }
 

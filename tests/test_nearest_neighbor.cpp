@@ -81,6 +81,48 @@ TEST_F(NearestNeighborTest, EqualsBruteForceForOtherLeafSizes) {
   EXPECT_THROW(ReferenceIndex(cloud_, sgdicp::KdTreeSettings{0}), sgdicp::InvalidSettingsError);
 }
 
+// nearest_within: the brute-force list of points closer than the radius, closest first and ties
+// by index, cut to k; the same from the KD-tree and from a voxel hash.
+TEST_F(NearestNeighborTest, NearestWithinIsTheBruteForceListCutAtTheRadiusAndAtK) {
+  const ReferenceIndex tree(cloud_);
+  const ReferenceIndex hash = ReferenceIndex::with_voxel_hash(cloud_, 0.4);
+  std::vector<Neighbor> got;
+  std::size_t cut_at_k = 0;
+  std::size_t cut_at_radius = 0;
+  for (std::size_t i = 0; i < queries_.size(); i += 7) {
+    const Eigen::Vector3f& q = queries_[i];
+    for (const float radius2 : {0.05F, 0.5F, 2.0F}) {
+      std::vector<Neighbor> want;
+      for (std::uint32_t j = 0; j < cloud_.size(); ++j) {
+        const float d2 = squared_distance(cloud_.points[j], q);
+        if (d2 < radius2) want.push_back({j, d2});
+      }
+      std::sort(want.begin(), want.end(), [](const Neighbor& a, const Neighbor& b) {
+        return a.squared_distance < b.squared_distance ||
+               (a.squared_distance == b.squared_distance && a.index < b.index);
+      });
+      for (const std::size_t k : {1U, 10U, 65U}) {
+        const std::size_t n = std::min(k, want.size());
+        (want.size() > k ? cut_at_k : cut_at_radius) += 1;
+        for (const ReferenceIndex* index : {&tree, &hash}) {
+          index->nearest_within(q, radius2, k, got);
+          ASSERT_EQ(got.size(), n) << "query " << i << " radius^2 " << radius2 << " k " << k;
+          for (std::size_t r = 0; r < n; ++r) {
+            ASSERT_EQ(got[r].index, want[r].index) << "query " << i << " rank " << r;
+            ASSERT_EQ(got[r].squared_distance, want[r].squared_distance);
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(cut_at_k, 100U);  // both cuts exercised
+  EXPECT_GT(cut_at_radius, 100U);
+  tree.nearest_within(queries_[0], 0.0F, 10, got);
+  EXPECT_TRUE(got.empty());
+  tree.nearest_within(queries_[0], 2.0F, 0, got);
+  EXPECT_TRUE(got.empty());
+}
+
 TEST_F(NearestNeighborTest, MaxDistanceBound) {
   const ReferenceIndex index(cloud_);
   std::mt19937_64 rng(32);

@@ -2,6 +2,7 @@
 #include "global/consensus.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -44,16 +45,30 @@ std::size_t count_inliers(const Eigen::Matrix4d& T, const std::vector<Eigen::Vec
 
 // A rigid motion keeps lengths: the three edges of the sample agree, and are long enough to fix
 // a rotation.
+// Compared squared: most samples stop here, so no square roots.
 bool edges_agree(const std::vector<Eigen::Vector3f>& from, const std::vector<Eigen::Vector3f>& to,
-                 const std::uint32_t (&s)[3], const ConsensusSettings& settings) {
-  for (int a = 0; a < 3; ++a) {
-    const int b = (a + 1) % 3;
-    const double lf = (from[s[a]] - from[s[b]]).norm();
-    const double lt = (to[s[a]] - to[s[b]]).norm();
-    if (lf < settings.min_edge_m || lt < settings.min_edge_m) return false;
-    if (std::min(lf, lt) < settings.edge_ratio * std::max(lf, lt)) return false;
+                 const std::array<std::uint32_t, 3>& s, const ConsensusSettings& settings) {
+  const double min_edge2 = settings.min_edge_m * settings.min_edge_m;
+  const double ratio2 = settings.edge_ratio * settings.edge_ratio;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const std::size_t b = (a + 1) % 3;
+    const double lf2 = (from[s[a]] - from[s[b]]).cast<double>().squaredNorm();
+    const double lt2 = (to[s[a]] - to[s[b]]).cast<double>().squaredNorm();
+    if (lf2 < min_edge2 || lt2 < min_edge2) return false;
+    if (std::min(lf2, lt2) < ratio2 * std::max(lf2, lt2)) return false;
   }
   return true;
+}
+
+// Three indices in [0, n) from two 64-bit draws, each 32 bits scaled by multiply and shift (no
+// division, no rejection: a bias below n / 2^32, nothing beside RANSAC's own randomness).
+std::array<std::uint32_t, 3> draw_three(std::mt19937_64& rng, std::uint32_t n) {
+  const std::uint64_t a = rng();
+  const std::uint64_t b = rng();
+  const auto scale = [n](std::uint64_t bits32) {
+    return static_cast<std::uint32_t>((bits32 * n) >> 32U);
+  };
+  return {scale(a >> 32U), scale(a & 0xffffffffU), scale(b >> 32U)};
 }
 
 // Samples still needed for `confidence` at an inlier ratio w (3 points per sample).
@@ -100,20 +115,21 @@ Consensus find_consensus(const std::vector<Eigen::Vector3f>& from,
   const auto distance2 =
       static_cast<float>(settings.inlier_distance_m * settings.inlier_distance_m);
   std::mt19937_64 rng(seed);
-  std::uniform_int_distribution<std::uint32_t> pick(0, static_cast<std::uint32_t>(n - 1));
   std::size_t best = 0;
-  while (
-      out.iterations < settings.max_iterations &&
-      static_cast<double>(out.iterations) <
-          samples_needed(static_cast<double>(best) / static_cast<double>(n), settings.confidence)) {
+  double needed = samples_needed(0.0, settings.confidence);  // changes only with `best`
+  while (out.iterations < settings.max_iterations && static_cast<double>(out.iterations) < needed) {
     ++out.iterations;
-    std::uint32_t s[3] = {pick(rng), pick(rng), pick(rng)};
+    const std::array<std::uint32_t, 3> s = draw_three(rng, static_cast<std::uint32_t>(n));
     if (s[0] == s[1] || s[1] == s[2] || s[0] == s[2] || !edges_agree(from, to, s, settings))
       continue;
     const Hypothesis h{fit_listed(from, to, {s[0], s[1], s[2]}), 0};
     const std::size_t c = count_inliers(h.T_to_from, from, to, distance2);
     if (c < 3) continue;
-    best = std::max(best, c);
+    if (c > best) {
+      best = c;
+      needed =
+          samples_needed(static_cast<double>(best) / static_cast<double>(n), settings.confidence);
+    }
     offer(out.hypotheses, {h.T_to_from, c}, settings);
   }
   // Refit each on its inliers (twice: the fit moves the inlier set a little).

@@ -85,10 +85,10 @@ std::vector<Fpfh> compute_fpfh(const PointCloud& cloud, const ReferenceIndex& in
   std::vector<Fpfh> spfh(n, Fpfh{});
   std::vector<Neighbor> found;
   for (std::size_t i = 0; i < n; ++i) {
-    index.k_nearest(cloud.points[i], settings.max_neighbors + 1, found);
+    index.nearest_within(cloud.points[i], radius2, settings.max_neighbors + 1, found);
     auto& kept = neighborhoods[i];
     for (const Neighbor& nb : found) {
-      if (nb.index != i && nb.squared_distance <= radius2) kept.push_back(nb);
+      if (nb.index != i) kept.push_back(nb);
     }
     if (cloud.normals[i].isZero()) continue;
     for (const Neighbor& nb : kept) {

@@ -72,6 +72,29 @@ class NearestWithin {
   bool found_ = false;
 };
 
+// Every point closer than a radius, unordered: the search prunes at the radius from the start
+// (a k-nearest set prunes only once it holds k points, and keeps them sorted as it goes).
+class AllWithin {
+ public:
+  using DistanceType = float;
+  using IndexType = std::uint32_t;
+  using CountType = std::size_t;
+
+  AllWithin(float squared_radius, std::vector<Neighbor>& found)
+      : radius2_(squared_radius), found_(found) {}
+  [[nodiscard]] std::size_t size() const { return found_.size(); }
+  [[nodiscard]] bool full() const { return true; }
+  bool addPoint(float dist, std::uint32_t index) {
+    if (dist < radius2_) found_.push_back({index, dist});
+    return true;
+  }
+  [[nodiscard]] float worstDist() const { return radius2_; }
+
+ private:
+  float radius2_;
+  std::vector<Neighbor>& found_;
+};
+
 // The nearest and second-nearest within the rejection distance. The nearest is NearestWithin's:
 // the tree is walked in the same order, so the first point at the least distance wins in both.
 class TwoNearestWithin {
@@ -460,6 +483,25 @@ void ReferenceIndex::k_nearest(const Eigen::Vector3f& query, std::size_t k,
   result.init(indices.data(), distances.data());
   impl_->search(query, result);
   for (std::size_t i = 0; i < result.size(); ++i) neighbors.push_back({indices[i], distances[i]});
+}
+
+void ReferenceIndex::nearest_within(const Eigen::Vector3f& query, float squared_radius,
+                                    std::size_t k, std::vector<Neighbor>& neighbors) const {
+  neighbors.clear();
+  if (k == 0 || !(squared_radius > 0.0F)) return;
+  AllWithin result(squared_radius, neighbors);
+  impl_->search(query, result);
+  // Closest first, ties by index: the same order whichever structure walked the points.
+  const auto closer = [](const Neighbor& a, const Neighbor& b) {
+    return a.squared_distance < b.squared_distance ||
+           (a.squared_distance == b.squared_distance && a.index < b.index);
+  };
+  if (neighbors.size() > k) {
+    std::nth_element(neighbors.begin(), neighbors.begin() + static_cast<std::ptrdiff_t>(k),
+                     neighbors.end(), closer);
+    neighbors.resize(k);
+  }
+  std::sort(neighbors.begin(), neighbors.end(), closer);
 }
 
 }  // namespace sgdicp

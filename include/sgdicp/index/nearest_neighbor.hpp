@@ -125,6 +125,12 @@ class ReferenceIndex {
   void k_nearest(const Eigen::Vector3f& query, std::size_t k,
                  std::vector<Neighbor>& neighbors) const;
 
+  /// The k nearest reference points closer than sqrt(squared_radius) to query, closest first
+  /// (ties by index). Cheaper than k_nearest when the radius holds about k points or fewer: the
+  /// search prunes at the radius from the start (FPFH's neighbourhoods, global/fpfh.hpp).
+  void nearest_within(const Eigen::Vector3f& query, float squared_radius, std::size_t k,
+                      std::vector<Neighbor>& neighbors) const;
+
  private:
   ReferenceIndex() = default;
   struct Impl;
