@@ -60,9 +60,9 @@ struct MovedSource {
 };
 
 // Counts the inliers among `samples` spread source points and fills evaluated_points, inliers,
-// inlier_ratio and inlier_rmse_m; returns the pairs when `keep_pairs` (for the degeneracy check).
+// inlier_ratio and inlier_rmse_m; returns the pairs (for the degeneracy check).
 std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex& reference,
-                                std::size_t samples, bool keep_pairs, std::size_t threads,
+                                std::size_t samples, std::size_t threads,
                                 RegistrationResult& result) {
   const std::size_t n = source.size();
   const bool split = resolve_thread_count(threads) >= 2;
@@ -91,7 +91,7 @@ std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex&
     for (std::size_t k = 0; k < count; ++k) {
       if (const auto& nn = found[k]) {
         sum_sq += nn->squared_distance;
-        if (keep_pairs) pairs.push_back({moved[k].cast<double>(), nn->index});
+        pairs.push_back({moved[k].cast<double>(), nn->index});
         ++result.inliers;
       }
     }
@@ -152,9 +152,9 @@ Eigen::Matrix<double, 6, 6> constraint_matrix(const std::vector<Pair>& pairs,
 }
 
 // Fills constraint_ratio and degenerate from the pairs of the final alignment.
-void check_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& reference,
-                      const EvaluationSettings& settings, const ReferenceNormals& normals,
-                      RegistrationResult& result) {
+void measure_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& reference,
+                        const EvaluationSettings& settings, const ReferenceNormals& normals,
+                        RegistrationResult& result) {
   if (pairs.size() < 6) {
     mark_degenerate(result, "; degenerate: fewer than 6 pairs in the final alignment");
     return;
@@ -199,14 +199,13 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                                  result.T_reference_source.topLeftCorner<3, 3>().cast<float>(),
                                  result.T_reference_source.topRightCorner<3, 1>().cast<float>(),
                                  static_cast<float>(max_distance_m * max_distance_m)};
-  std::vector<Pair> pairs = count_inliers(moved_source, reference, samples,
-                                          settings.check_degeneracy, settings.num_threads, result);
-  if (!settings.check_degeneracy) return;
+  std::vector<Pair> pairs =
+      count_inliers(moved_source, reference, samples, settings.num_threads, result);
   // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
   // draws its own sample then.
   const std::size_t wanted = std::min(n, settings.degeneracy_pairs);
   if (samples < wanted) pairs = sample_pairs(moved_source, reference, wanted);
-  check_degeneracy(pairs, reference, settings, normals, result);
+  measure_degeneracy(pairs, reference, settings, normals, result);
 }
 
 double overlap_fraction(const PointCloud& source, const ReferenceIndex& reference,

@@ -9,7 +9,8 @@
 // rotations weigh alike), has a near-zero eigenvalue for every motion the data does not constrain:
 // two translations and a rotation on a single plane, the axis of a corridor or a cylinder. We
 // report the smallest over the largest eigenvalue; the result is flagged degenerate below
-// `degenerate_below`.
+// `degenerate_below`. The check always runs: switching it off changed no pose and saved at most a
+// few percent of a run (docs/registration.md, *Why each setting is there*).
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -25,8 +26,6 @@ namespace sgdicp {
 struct EvaluationSettings {
   /// Source points to evaluate (spread by a golden-ratio sequence); 0 = all.
   std::size_t evaluation_points = 2000;
-  /// Whether to compute constraint_ratio / degenerate.
-  bool check_degeneracy = true;
   /// Ratio below which the geometry is reported degenerate (unitless). Measured: 0.08-0.23 on
   /// the real pairs of shared/data, 1e-6 to 3e-3 on a synthetic plane, line, pipe and corridor.
   double degenerate_below = 1e-2;
