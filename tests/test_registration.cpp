@@ -598,9 +598,8 @@ TEST(Threads, FinalStatisticsOnTwoThreadsCountEveryInlierOnce) {
   RegistrationResult two = one;
   EvaluationSettings settings;
   settings.evaluation_points = 0;  // every point: three blocks
-  evaluate_alignment(source, index, 0.05, settings, one);
-  settings.num_threads = 2;
-  evaluate_alignment(source, index, 0.05, settings, two);
+  evaluate_alignment(source, index, 0.05, settings, 1, one);
+  evaluate_alignment(source, index, 0.05, settings, 2, two);
   std::size_t expected = 0;
   const Eigen::Affine3f T(one.T_reference_source.cast<float>());
   for (const auto& p : source.points) expected += index.nearest(T * p, 0.05F * 0.05F) ? 1 : 0;

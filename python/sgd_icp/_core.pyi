@@ -461,10 +461,6 @@ class Settings:
     """
     record_trace: bool
     """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
-    check_degeneracy: bool
-    """Check the final alignment for degenerate geometry (plane, corridor) and report it. Keyword
-    check_degeneracy=. Default True.
-    """
     robust_scaling: bool
     """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
     bounding box of every point). Keyword robust_scaling=. Default True.
@@ -528,7 +524,6 @@ class Settings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -589,7 +584,6 @@ class Settings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -653,7 +647,6 @@ class Settings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -690,7 +683,7 @@ class BatchSettings:
     BatchSettings(**overrides) is the default (point-to-point) with the batch keyword overrides
     of register() applied (max_distance, max_distance_unit, max_iterations, kernel, kernel_scale,
     trim, neighbors, damping, translation_tolerance, rotation_tolerance, evaluation_points,
-    check_degeneracy, cost).
+    cost).
     """
 
     cost: CostType
@@ -736,10 +729,6 @@ class BatchSettings:
     """Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all, in [0,
     4294967295]. Keyword evaluation_points=. Default 2000.
     """
-    check_degeneracy: bool
-    """Check the final alignment for degenerate geometry (plane, corridor) and report it. Keyword
-    check_degeneracy=. Default True.
-    """
     robust_scaling: bool
     """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
     bounding box of every point). Keyword robust_scaling=. Default True.
@@ -781,7 +770,6 @@ class BatchSettings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -807,7 +795,6 @@ class BatchSettings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -833,7 +820,6 @@ class BatchSettings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -860,7 +846,6 @@ class BatchSettings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -887,7 +872,6 @@ class BatchSettings:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -989,7 +973,6 @@ class ReferenceIndex:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
@@ -1160,13 +1143,12 @@ class RegistrationResult:
     @property
     def constraint_ratio(self) -> float:
         """Smallest over largest eigenvalue of the point-to-plane information matrix of the final
-        inlier pairs (scaled space); near 0, some motion is not constrained by the data (with
-        check_degeneracy).
+        inlier pairs (scaled space); near 0, some motion is not constrained by the data.
         """
     @property
     def degenerate(self) -> bool:
-        """constraint_ratio below the threshold: the transform is not trustworthy along some motion
-        (see message).
+        """constraint_ratio below 0.01: the transform is not trustworthy along some motion (see
+        message).
         """
     @property
     def build_ms(self) -> float:
@@ -1312,7 +1294,6 @@ def register(
     neighbors: int = ...,
     flat_neighbors: int = ...,
     flatness: float = ...,
-    check_degeneracy: bool = ...,
     threads: int = ...,
     voxel_size: float = ...,
     downsample_to: int = ...,
@@ -1390,9 +1371,9 @@ def register(
         rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        flat_neighbors (0, [0, 1000]), flatness (0.05, [0, 0.333333]), check_degeneracy (True),
-        threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]), downsample_to (0, [0, 4294967295]),
-        robust_scaling (True), record_trace (False).
+        flat_neighbors (0, [0, 1000]), flatness (0.05, [0, 0.333333]), threads (1, [0, 1024]),
+        voxel_size (0.0, [0, 1000000]), downsample_to (0, [0, 4294967295]), robust_scaling (True),
+        record_trace (False).
         For the SGD methods:
         optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
         batch_size (160, [1, 10000000]), cap_batch_to_source (True),
@@ -1408,14 +1389,13 @@ def register(
         evaluation_points (2000, [0, 4294967295]), cost (CostType.point_to_plane),
         coarse_cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        flat_neighbors (10, [0, 1000]), flatness (0.05, [0, 0.333333]), check_degeneracy (True),
-        threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]),
-        downsample_to (20000, [0, 4294967295]), robust_scaling (True), record_trace (False),
-        uncertainty (UncertaintyType.none), uncertainty_samples (200, [2, 1000000]),
-        burn_in (50, [0, 10000000]), thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]),
-        particles (32, [1, 10000]), svgd_iterations (50, [1, 1000000]),
-        svgd_step (0.05, [0.0001, 10]), svgd_spread (3.0, [0.001, 1000000000]), temper (True),
-        block_size (Distance.scaled(0.1)).
+        flat_neighbors (10, [0, 1000]), flatness (0.05, [0, 0.333333]), threads (1, [0, 1024]),
+        voxel_size (0.0, [0, 1000000]), downsample_to (20000, [0, 4294967295]),
+        robust_scaling (True), record_trace (False), uncertainty (UncertaintyType.none),
+        uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
+        thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), particles (32, [1, 10000]),
+        svgd_iterations (50, [1, 1000000]), svgd_step (0.05, [0.0001, 10]),
+        svgd_spread (3.0, [0.001, 1000000000]), temper (True), block_size (Distance.scaled(0.1)).
         With init='global' (an error without it), the global estimate's settings, named like the
         CLI's --global-* options (docs/global.md):
         global_feature_points (3000, [10, 10000000]), global_normal_neighbors (12, [3, 1000]),
@@ -1812,7 +1792,6 @@ class Odometry:
         neighbors: int = ...,
         flat_neighbors: int = ...,
         flatness: float = ...,
-        check_degeneracy: bool = ...,
         threads: int = ...,
         robust_scaling: bool = ...,
         record_trace: bool = ...,

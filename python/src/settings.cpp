@@ -429,8 +429,6 @@ void bind_sgd_settings(py::module_& m) {
   def_count(settings, "evaluation_points", &SgdSettings::evaluation,
             &EvaluationSettings::evaluation_points, "");
   def_flag(settings, "record_trace", &SgdSettings::record_trace, "");
-  def_flag(settings, "check_degeneracy", &SgdSettings::evaluation,
-           &EvaluationSettings::check_degeneracy, "");
   def_flag(settings, "robust_scaling", &SgdSettings::scaling, &ScalingSettings::robust, "");
   def_count(settings, "num_threads", &SgdSettings::num_threads, "");
   def_voxel_grid(settings);
@@ -447,7 +445,7 @@ void bind_batch_settings(py::module_& m) {
       "BatchSettings(**overrides) is the default (point-to-point) with the batch keyword "
       "overrides of register() applied (max_distance, max_distance_unit, max_iterations, kernel, "
       "kernel_scale, trim, neighbors, damping, translation_tolerance, rotation_tolerance, "
-      "evaluation_points, check_degeneracy, cost).");
+      "evaluation_points, cost).");
   batch
       .def(py::init([](const py::kwargs& overrides) {
              return with_batch_overrides(BatchSettings{}, overrides, "");
@@ -498,8 +496,6 @@ void bind_batch_settings(py::module_& m) {
                      "NeighborhoodSettings for the normals and covariances of the plane costs.");
   def_count(batch, "evaluation_points", &BatchSettings::evaluation,
             &EvaluationSettings::evaluation_points, "");
-  def_flag(batch, "check_degeneracy", &BatchSettings::evaluation,
-           &EvaluationSettings::check_degeneracy, "");
   def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling, "");
   def_count(batch, "num_threads", &BatchSettings::num_threads, "");
   def_voxel_grid(batch);

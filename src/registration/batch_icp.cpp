@@ -342,8 +342,7 @@ RegistrationResult align_batch(const PointCloud& source, const ReferenceIndex& r
   BatchRun run(src.cloud(), reference, settings, scale_m);
   result.T_reference_source =
       orthonormalized(run.minimise(frame.to_stored(orthonormalized(T_init)), result));
-  detail::conclude(result, src.cloud(), reference, run.max_distance_m(),
-                   detail::evaluation_of(settings), clock);
+  detail::conclude(result, src.cloud(), reference, run.max_distance_m(), settings, clock);
   frame.to_clouds(result);
   return result;
 }

@@ -16,6 +16,17 @@
 namespace sgdicp {
 namespace {
 
+// The degeneracy check's constants; it always runs, so they are not settings.
+// Ratio below which the geometry is reported degenerate (unitless). Measured: 0.08-0.23 on the
+// real pairs of shared/data, 1e-6 to 3e-3 on a synthetic plane, line, pipe and corridor.
+constexpr double kDegenerateBelow = 1e-2;
+// Pairs (spread like the samples) the check uses: a thousand pin the eigenvalues down well; more
+// only cost k-nearest queries.
+constexpr std::size_t kDegeneracyPairs = 1000;
+// Neighbours for a reference normal that neither the registration nor the cloud gives (the
+// estimator of estimate_normals).
+constexpr std::size_t kNormalNeighbors = 10;
+
 // The k-th of `count` sample indices in [0, n): the golden-ratio (Kronecker) sequence spreads
 // them evenly without the aliasing a fixed stride has on data in a periodic order (scan rings,
 // interleaved surfaces).
@@ -60,9 +71,9 @@ struct MovedSource {
 };
 
 // Counts the inliers among `samples` spread source points and fills evaluated_points, inliers,
-// inlier_ratio and inlier_rmse_m; returns the pairs when `keep_pairs` (for the degeneracy check).
+// inlier_ratio and inlier_rmse_m; returns the pairs (for the degeneracy check).
 std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex& reference,
-                                std::size_t samples, bool keep_pairs, std::size_t threads,
+                                std::size_t samples, std::size_t threads,
                                 RegistrationResult& result) {
   const std::size_t n = source.size();
   const bool split = resolve_thread_count(threads) >= 2;
@@ -91,7 +102,7 @@ std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex&
     for (std::size_t k = 0; k < count; ++k) {
       if (const auto& nn = found[k]) {
         sum_sq += nn->squared_distance;
-        if (keep_pairs) pairs.push_back({moved[k].cast<double>(), nn->index});
+        pairs.push_back({moved[k].cast<double>(), nn->index});
         ++result.inliers;
       }
     }
@@ -129,15 +140,12 @@ void mark_degenerate(RegistrationResult& result, const char* why) {
 Eigen::Matrix<double, 6, 6> constraint_matrix(const std::vector<Pair>& pairs,
                                               const Eigen::Vector3d& centroid, double spread,
                                               const ReferenceIndex& reference,
-                                              const EvaluationSettings& settings,
                                               const ReferenceNormals& normals) {
   Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
   std::vector<Neighbor> scratch;
-  NeighborhoodSettings neighborhood;
-  neighborhood.k = std::clamp<std::size_t>(settings.normal_neighbors, 3, 1000);
-  const NeighborhoodSettings stored = detail::in_stored_frame(neighborhood, reference.cloud());
-  // A thousand pairs pin the eigenvalues down well; more only cost k-nearest queries.
-  const std::size_t used = std::min(pairs.size(), settings.degeneracy_pairs);
+  const NeighborhoodSettings stored =
+      detail::in_stored_frame({.k = kNormalNeighbors}, reference.cloud());
+  const std::size_t used = std::min(pairs.size(), kDegeneracyPairs);
   for (std::size_t k = 0; k < used; ++k) {
     const auto& p = pairs[sample_index(k, used, pairs.size())];
     const Eigen::Vector3d normal =
@@ -152,9 +160,8 @@ Eigen::Matrix<double, 6, 6> constraint_matrix(const std::vector<Pair>& pairs,
 }
 
 // Fills constraint_ratio and degenerate from the pairs of the final alignment.
-void check_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& reference,
-                      const EvaluationSettings& settings, const ReferenceNormals& normals,
-                      RegistrationResult& result) {
+void measure_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& reference,
+                        const ReferenceNormals& normals, RegistrationResult& result) {
   if (pairs.size() < 6) {
     mark_degenerate(result, "; degenerate: fewer than 6 pairs in the final alignment");
     return;
@@ -172,17 +179,17 @@ void check_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& refe
     return;
   }
   const Eigen::Matrix<double, 6, 6> h =
-      constraint_matrix(pairs, centroid, spread, reference, settings, normals);
+      constraint_matrix(pairs, centroid, spread, reference, normals);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(h, Eigen::EigenvaluesOnly);
   const double largest = eig.eigenvalues()[5];
   result.constraint_ratio = largest > 0.0 ? std::max(0.0, eig.eigenvalues()[0]) / largest : 0.0;
-  result.degenerate = result.constraint_ratio < settings.degenerate_below;
+  result.degenerate = result.constraint_ratio < kDegenerateBelow;
   if (result.degenerate) {
     char note[160];
     std::snprintf(note, sizeof(note),
                   "; degenerate geometry (constraint ratio %.2g < %.2g): some motion is not "
                   "constrained by the data",
-                  result.constraint_ratio, settings.degenerate_below);
+                  result.constraint_ratio, kDegenerateBelow);
     result.message += note;
   }
 }
@@ -191,7 +198,8 @@ void check_degeneracy(const std::vector<Pair>& pairs, const ReferenceIndex& refe
 
 void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
                         double max_distance_m, const EvaluationSettings& settings,
-                        RegistrationResult& result, const ReferenceNormals& normals) {
+                        std::size_t num_threads, RegistrationResult& result,
+                        const ReferenceNormals& normals) {
   const std::size_t n = source.size();
   const std::size_t samples =
       settings.evaluation_points == 0 ? n : std::min(n, settings.evaluation_points);
@@ -199,14 +207,12 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                                  result.T_reference_source.topLeftCorner<3, 3>().cast<float>(),
                                  result.T_reference_source.topRightCorner<3, 1>().cast<float>(),
                                  static_cast<float>(max_distance_m * max_distance_m)};
-  std::vector<Pair> pairs = count_inliers(moved_source, reference, samples,
-                                          settings.check_degeneracy, settings.num_threads, result);
-  if (!settings.check_degeneracy) return;
+  std::vector<Pair> pairs = count_inliers(moved_source, reference, samples, num_threads, result);
   // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
   // draws its own sample then.
-  const std::size_t wanted = std::min(n, settings.degeneracy_pairs);
+  const std::size_t wanted = std::min(n, kDegeneracyPairs);
   if (samples < wanted) pairs = sample_pairs(moved_source, reference, wanted);
-  check_degeneracy(pairs, reference, settings, normals, result);
+  measure_degeneracy(pairs, reference, normals, result);
 }
 
 double overlap_fraction(const PointCloud& source, const ReferenceIndex& reference,

@@ -453,9 +453,8 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   // The degeneracy check reads the reference normals the run estimated (or would have).
-  detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(),
-                   detail::evaluation_of(settings), clock,
-                   [&run](std::uint32_t i) { return run.reference_normal(i); });
+  detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(), settings,
+                   clock, [&run](std::uint32_t i) { return run.reference_normal(i); });
   frame.to_clouds(result);
   return result;
 }

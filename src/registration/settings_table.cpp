@@ -85,8 +85,6 @@ constexpr std::string_view kFlatnessHelp =
     "flat neighbourhood (see --flat-neighbors)";
 constexpr std::string_view kEvaluationHelp =
     "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all";
-constexpr std::string_view kDegeneracyHelp =
-    "Check the final alignment for degenerate geometry (plane, corridor) and report it";
 constexpr std::string_view kRobustScalingHelp =
     "Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's "
     "bounding box of every point)";
@@ -303,8 +301,6 @@ std::vector<Setting<S>> result_and_pair_settings() {
           {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
       setting<S, &S::neighborhood, &N::flatness>(
           {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
-      setting<S, &S::evaluation, &E::check_degeneracy>(
-          {"check-degeneracy", "evaluation.check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
       setting<S, &S::downsampling, &D::voxel_size_m>(
           {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
@@ -418,8 +414,6 @@ std::vector<Setting<B>> make_batch_table() {
           {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
       setting<B, &B::neighborhood, &N::flatness>(
           {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
-      setting<B, &B::evaluation, &E::check_degeneracy>(
-          {"check-degeneracy", "evaluation.check_degeneracy", {}, "", kDegeneracyHelp}),
       setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
       setting<B, &B::downsampling, &D::voxel_size_m>(
           {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),

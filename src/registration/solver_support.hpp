@@ -175,21 +175,15 @@ inline void set_stop(RegistrationResult& result, StopReason reason, std::string 
   return "reached the iteration limit of " + std::to_string(max_iterations) + " before converging";
 }
 
-/// The final statistics' settings of a run: its evaluation group, on the run's threads.
+/// Fills the final statistics of result.T_reference_source (the run's evaluation group, on its
+/// threads) and the time of the whole run.
 template <typename Settings>
-[[nodiscard]] EvaluationSettings evaluation_of(const Settings& settings) {
-  EvaluationSettings evaluation = settings.evaluation;
-  evaluation.num_threads = settings.num_threads;
-  return evaluation;
-}
-
-/// Fills the final statistics of result.T_reference_source and the time of the whole run.
-inline void conclude(RegistrationResult& result, const PointCloud& source,
-                     const ReferenceIndex& reference, double max_distance_m,
-                     const EvaluationSettings& evaluation, const Stopwatch& clock,
-                     const ReferenceNormals& normals = {}) {
+void conclude(RegistrationResult& result, const PointCloud& source, const ReferenceIndex& reference,
+              double max_distance_m, const Settings& settings, const Stopwatch& clock,
+              const ReferenceNormals& normals = {}) {
   result.final_max_distance_m = max_distance_m;
-  evaluate_alignment(source, reference, max_distance_m, evaluation, result, normals);
+  evaluate_alignment(source, reference, max_distance_m, settings.evaluation, settings.num_threads,
+                     result, normals);
   result.time_ms = clock.elapsed_ms();
 }
 

@@ -68,7 +68,7 @@ def test_batch_overrides_apply(small_scene):
     assert r.iterations == 3 and r.stop_reason == "max_iterations" and not r.converged
     r = sgd_icp.register(
         source, reference, method="icp-plane", max_distance=0.5, max_distance_unit="m",
-        check_degeneracy=False, evaluation_points=500,
+        evaluation_points=500,
     )
     assert r.final_max_distance_m == pytest.approx(0.5)
     assert r.evaluated_points <= 500
@@ -150,7 +150,6 @@ BATCH_DEFAULTS = {
     "rotation_tolerance": 1e-5,
     "initial_damping": 1e-6,
     "evaluation_points": 2000,
-    "check_degeneracy": True,
     "record_trace": False,
 }
 
@@ -182,14 +181,14 @@ def test_batch_keyword_overrides_set_the_documented_fields():
     s = sgd_icp.BatchSettings(
         max_distance=2.0, max_distance_unit="m", max_iterations=7, kernel="huber",
         kernel_scale=0.1, trim=0.8, neighbors=12, damping=0.0, translation_tolerance=1e-4,
-        rotation_tolerance=2e-4, evaluation_points=0, check_degeneracy=False, cost="plane-to-plane",
+        rotation_tolerance=2e-4, evaluation_points=0, cost="plane-to-plane",
     )
     assert s.max_correspondence_distance == sgd_icp.Distance.metres(2.0)
     assert s.kernel_scale == sgd_icp.Distance.metres(0.1)
     assert s.max_iterations == 7 and s.kernel == sgd_icp.KernelType.huber
     assert s.trim_ratio == 0.8 and s.neighborhood.k == 12 and s.initial_damping == 0.0
     assert s.translation_tolerance == 1e-4 and s.rotation_tolerance == 2e-4
-    assert s.evaluation_points == 0 and s.check_degeneracy is False
+    assert s.evaluation_points == 0
     assert s.cost == sgd_icp.CostType.plane_to_plane
     assert s.replace(max_iterations=3).max_iterations == 3 and s.max_iterations == 7
 

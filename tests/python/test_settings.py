@@ -57,7 +57,6 @@ DEFAULTS = {
     "seed": 2019,
     "evaluation_points": 2000,
     "record_trace": False,
-    "check_degeneracy": True,
 }
 
 PAPER_CHANGES = {
@@ -126,7 +125,6 @@ def test_keyword_overrides_set_the_documented_fields():
         kernel_scale=0.05,
         trim=0.8,
         neighbors=12,
-        check_degeneracy=False,
     )
     expected = {
         "batch_size": 100,
@@ -159,7 +157,6 @@ def test_keyword_overrides_set_the_documented_fields():
         "kernel_scale": Distance.metres(0.05),
         "trim_ratio": 0.8,
         "neighborhood.k": 12,
-        "check_degeneracy": False,
     }
     for path, value in expected.items():
         assert get(s, path) == value, path

@@ -80,12 +80,12 @@ struct RegistrationResult {
   double voxel_size_m = 0.0;
   std::size_t source_points = 0;
   std::size_t reference_points = 0;
-  /// Geometry check of the final alignment (when requested): the smallest over the largest
+  /// Geometry check of the final alignment (always made): the smallest over the largest
   /// eigenvalue of the point-to-plane information matrix of the inlier pairs, in the scaled
   /// space. Near 0, some motion (sliding along a plane or a corridor, turning about an axis of
   /// symmetry) is not constrained by the data, and the transform is not trustworthy along it.
   double constraint_ratio = 0.0;
-  bool degenerate = false;        ///< constraint_ratio below the threshold: see `message`
+  bool degenerate = false;        ///< constraint_ratio below 0.01: see `message`
   std::vector<TraceEntry> trace;  ///< per iteration, when record_trace is set
 
   // Pose uncertainty (SgdSettings::uncertainty; docs/uncertainty.md), zero without it.
@@ -153,11 +153,10 @@ void for_each_result_field(F&& f) {
   f("reference_points", &R::reference_points, "Reference points indexed (after thinning).");
   f("constraint_ratio", &R::constraint_ratio,
     "Smallest over largest eigenvalue of the point-to-plane information matrix of the final "
-    "inlier pairs (scaled space); near 0, some motion is not constrained by the data (with "
-    "check_degeneracy).");
+    "inlier pairs (scaled space); near 0, some motion is not constrained by the data.");
   f("degenerate", &R::degenerate,
-    "constraint_ratio below the threshold: the transform is not trustworthy along some motion "
-    "(see message).");
+    "constraint_ratio below 0.01: the transform is not trustworthy along some motion (see "
+    "message).");
   f("residual_sigma_m", &R::residual_sigma_m,
     "With uncertainty: RMS of the scalar residuals of the pairs at the optimum, metres (sigma of "
     "the likelihood).");

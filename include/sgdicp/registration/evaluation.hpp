@@ -8,8 +8,9 @@
 // point relative to the pairs' centroid, in units of their RMS spread so that translations and
 // rotations weigh alike), has a near-zero eigenvalue for every motion the data does not constrain:
 // two translations and a rotation on a single plane, the axis of a corridor or a cylinder. We
-// report the smallest over the largest eigenvalue; the result is flagged degenerate below
-// `degenerate_below`.
+// report the smallest over the largest eigenvalue; the result is flagged degenerate below 0.01.
+// The check always runs: switching it off changed no pose and saved at most a few percent of a
+// run (docs/registration.md, *Why each setting is there*).
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -22,23 +23,11 @@
 
 namespace sgdicp {
 
+/// What a user chooses of the final statistics; the degeneracy check's constants are
+/// evaluation.cpp's, its threads and normals come from the registration.
 struct EvaluationSettings {
   /// Source points to evaluate (spread by a golden-ratio sequence); 0 = all.
   std::size_t evaluation_points = 2000;
-  /// Whether to compute constraint_ratio / degenerate.
-  bool check_degeneracy = true;
-  /// Ratio below which the geometry is reported degenerate (unitless). Measured: 0.08-0.23 on
-  /// the real pairs of shared/data, 1e-6 to 3e-3 on a synthetic plane, line, pipe and corridor.
-  double degenerate_below = 1e-2;
-  /// Pairs (spread the same way) used for the degeneracy check.
-  std::size_t degeneracy_pairs = 1000;
-  /// Neighbours for reference normals when the reference cloud has none (the estimator of
-  /// estimate_normals, surfaces/normals.hpp; clamped to its range [3, 1000]).
-  std::size_t normal_neighbors = 10;
-  /// Threads for the inlier queries: 1, or two halves on two threads for 0 (every core) and
-  /// more (a registration passes its num_threads). The same values for any count: the sums are
-  /// made in sample order on the calling thread.
-  std::size_t num_threads = 1;
 
   bool operator==(const EvaluationSettings&) const = default;
 };
@@ -48,12 +37,15 @@ using ReferenceNormals = std::function<Eigen::Vector3f(std::uint32_t)>;
 
 /// Fills result.evaluated_points, inliers, inlier_ratio, inlier_rmse_m, constraint_ratio and
 /// degenerate for the transform in result.T_reference_source and pairs within max_distance_m.
-/// The degeneracy check takes the reference normals from `normals` when given (a registration's
-/// own, so that they are the ones its cost used), else from the cloud, else from
-/// settings.normal_neighbors neighbours by the estimator of estimate_normals.
+/// The inlier queries run on one thread for num_threads 1, else in two halves on two threads (a
+/// registration passes its own num_threads); the same values for any count, since the sums are
+/// made in sample order on the calling thread. The degeneracy check takes the reference normals
+/// from `normals` when given (a registration's own, so that they are the ones its cost used),
+/// else from the cloud, else from 10 neighbours by the estimator of estimate_normals.
 void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
                         double max_distance_m, const EvaluationSettings& settings,
-                        RegistrationResult& result, const ReferenceNormals& normals = {});
+                        std::size_t num_threads, RegistrationResult& result,
+                        const ReferenceNormals& normals = {});
 
 /// The fraction of (at most max_points, evenly strided) source points that T_reference_source
 /// puts within radius_m of a reference point: how much of the source the reference covers

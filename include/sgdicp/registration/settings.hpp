@@ -146,10 +146,9 @@ struct SgdSettings {
   bool average_iterates = true;
   /// Record a per-iteration trace in the result.
   bool record_trace = false;
-  /// The final statistics (evaluate_alignment): source points evaluated (0 = all) and whether
-  /// to check the final alignment for degenerate geometry (a plane, a line, a corridor; about
-  /// `evaluation_points` k-nearest queries). Its num_threads is not read: the statistics use
-  /// the run's num_threads.
+  /// The final statistics (evaluate_alignment, on the run's num_threads): source points
+  /// evaluated (0 = all). The check for degenerate geometry (a plane, a line, a corridor) always
+  /// runs.
   EvaluationSettings evaluation{};
   /// Threads of one registration: where the library builds the index (reference_index_for:
   /// align() on clouds, the CLI, Python) the voxel grid's passes over the raw points (the size
