@@ -9,6 +9,8 @@
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
+#include <iterator>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -270,9 +272,19 @@ std::string missing_rows(const std::string& doc, const std::vector<Setting<S>>& 
   return missing;
 }
 
-TEST(SettingsDocs, RegistrationMdListsEverySettingAsTheTableSays) {
-  EXPECT_EQ(missing_rows(read_doc("registration.md"), sgd_settings_table()), "")
+// The settings table's rows of a doc: `member` | `--option` or – | `keyword` | ...
+std::size_t setting_rows(const std::string& doc) {
+  static const std::regex row(R"(\n\| `[^`]+` \| (`--[^`]+`|–) \| `[a-z_0-9]+` \|)");
+  return static_cast<std::size_t>(
+      std::distance(std::sregex_iterator(doc.begin(), doc.end(), row), std::sregex_iterator()));
+}
+
+TEST(SettingsDocs, RegistrationMdListsEverySettingAsTheTableSaysAndNoOther) {
+  const std::string doc = read_doc("registration.md");
+  EXPECT_EQ(missing_rows(doc, sgd_settings_table()), "")
       << "rows of docs/registration.md to update (keep the meaning column)";
+  // No row of a setting the table does not have (a removed or renamed one).
+  EXPECT_EQ(setting_rows(doc), sgd_settings_table().size());
 }
 
 TEST(SettingsDocs, GlobalMdListsEverySettingAsTheTableSaysAndNoOther) {
