@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/rigid_fit.hpp"
+#include "sgdicp/metrics/metrics.hpp"
 
 namespace sgdicp::detail {
 namespace {
@@ -100,10 +101,8 @@ void offer(std::vector<Hypothesis>& list, const Hypothesis& h, const ConsensusSe
 
 bool distinct(const Eigen::Matrix4d& a, const Eigen::Matrix4d& b,
               const ConsensusSettings& settings) {
-  const Eigen::Matrix3d dR = a.topLeftCorner<3, 3>().transpose() * b.topLeftCorner<3, 3>();
-  const double angle = std::acos(std::clamp((dR.trace() - 1.0) / 2.0, -1.0, 1.0));
-  const double shift = (a.topRightCorner<3, 1>() - b.topRightCorner<3, 1>()).norm();
-  return angle > settings.distinct_rotation_rad || shift > settings.distinct_translation_m;
+  return rotation_error_geodesic(a, b) > settings.distinct_rotation_rad ||
+         translation_error(a, b) > settings.distinct_translation_m;
 }
 
 Consensus find_consensus(const std::vector<Eigen::Vector3f>& from,

@@ -351,7 +351,8 @@ Odometry::Attempt Odometry::attempt(const PointCloud& source, const ReferenceInd
 // Whether the global registration's answer confirms the wide basin's: the same pose within a
 // few degrees and two map voxels ("" = confirmed).
 std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) const {
-  if (!global.why.empty()) return "the global registration does not confirm it: " + global.why;
+  // The global start's own reason follows in the frame's message ("global: ..."): not twice.
+  if (!global.why.empty()) return "not confirmed by the global registration";
   const Eigen::Matrix4d& T_global = global.result.T_reference_source;
   const Eigen::Matrix4d& T_wide = wide.result.T_reference_source;
   const double turn_deg = rotation_error_geodesic(T_wide, T_global) * 180.0 / std::numbers::pi;
