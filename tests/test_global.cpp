@@ -195,6 +195,15 @@ TEST(FeatureMatching, ExhaustiveMatchesAreTheNearestAndTreesFindTheSameCopies) {
     EXPECT_EQ(copies, 300U);
     EXPECT_LE(matches->size(), 400U - 1U);
   }
+  // A reference of 9,100 descriptors: the exhaustive search takes narrower blocks of the source
+  // (its products bounded to 4 MB) and still finds every copy.
+  std::vector<Fpfh> large = reference;
+  while (large.size() < 9100) large.push_back(random_descriptor(rng));
+  std::size_t large_copies = 0;
+  for (const auto& [i, j] : detail::match_features(source, large, 3)) {
+    large_copies += j < original.size() && original[j] == i ? 1 : 0;
+  }
+  EXPECT_EQ(large_copies, 300U);
   const auto all = detail::match_features(source, reference, 1000);  // too few mutual: all
   ASSERT_EQ(all.size(), 399U);
   for (const auto& [i, j] : all) {

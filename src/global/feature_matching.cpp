@@ -60,8 +60,12 @@ Eigen::MatrixXf as_columns(const FeatureAdaptor& a) {
   return m;
 }
 
-// |s - r|^2 = |s|^2 + |r|^2 - 2 s.r, the products a block of source columns at a time (the
-// block's distance matrix stays in cache). Ties go to the lower position.
+// Products held at once, floats (4 MB): a block of source columns is narrower against a larger
+// reference, so that the block's distance matrix stays in cache and its memory bounded.
+constexpr Eigen::Index kBlockFloats = Eigen::Index{1} << 20;
+
+// |s - r|^2 = |s|^2 + |r|^2 - 2 s.r, the products a block of source columns at a time. Ties go
+// to the lower position.
 NearestBothWays nearest_exhaustive(const FeatureAdaptor& source, const FeatureAdaptor& reference) {
   const Eigen::MatrixXf s = as_columns(source);
   const Eigen::MatrixXf r = as_columns(reference);
@@ -71,10 +75,10 @@ NearestBothWays nearest_exhaustive(const FeatureAdaptor& source, const FeatureAd
   NearestBothWays out{std::vector<std::uint32_t>(static_cast<std::size_t>(s.cols()), 0),
                       std::vector<std::uint32_t>(static_cast<std::size_t>(m), 0)};
   Eigen::VectorXf r_best = Eigen::VectorXf::Constant(m, std::numeric_limits<float>::max());
-  constexpr Eigen::Index kBlock = 128;
-  Eigen::MatrixXf dot(m, kBlock);
-  for (Eigen::Index j0 = 0; j0 < s.cols(); j0 += kBlock) {
-    const Eigen::Index b = std::min(kBlock, s.cols() - j0);
+  const Eigen::Index block = std::clamp<Eigen::Index>(kBlockFloats / m, 1, 128);
+  Eigen::MatrixXf dot(m, std::min(block, s.cols()));
+  for (Eigen::Index j0 = 0; j0 < s.cols(); j0 += block) {
+    const Eigen::Index b = std::min(block, s.cols() - j0);
     dot.leftCols(b).noalias() = r.transpose() * s.middleCols(j0, b);
     for (Eigen::Index j = 0; j < b; ++j) {
       float s_best = std::numeric_limits<float>::max();
