@@ -313,12 +313,7 @@ TEST(SettingsDocs, GlobalMdListsEverySettingAsTheTableSaysAndNoOther) {
   EXPECT_EQ(missing_rows(doc, global_settings_table()), "")
       << "rows of docs/global.md to update (keep the meaning column)";
   // No row of a setting the table does not have (a removed or renamed one).
-  std::size_t rows = 0;
-  for (std::size_t at = doc.find("` | `--global-"); at != std::string::npos;
-       at = doc.find("` | `--global-", at + 1)) {
-    ++rows;
-  }
-  EXPECT_EQ(rows, global_settings_table().size());
+  EXPECT_EQ(setting_rows(doc), global_settings_table().size());
 }
 
 }  // namespace

@@ -45,8 +45,7 @@ std::size_t count_inliers(const Eigen::Matrix4d& T, const std::vector<Eigen::Vec
 }
 
 // A rigid motion keeps lengths: the three edges of the sample agree, and are long enough to fix
-// a rotation.
-// Compared squared: most samples stop here, so no square roots.
+// a rotation. Compared squared: most samples stop here, so no square roots.
 bool edges_agree(const std::vector<Eigen::Vector3f>& from, const std::vector<Eigen::Vector3f>& to,
                  const std::array<std::uint32_t, 3>& s, const ConsensusSettings& settings) {
   const double min_edge2 = settings.min_edge_m * settings.min_edge_m;

@@ -12,10 +12,11 @@ namespace sgdicp::detail {
 namespace {
 
 constexpr int kDims = 33;
-// Approximate search: a neighbour within (1 + eps) of the nearest's distance is accepted. On a
-// turned KITTI pair at 3,000 feature points the global estimate took 199 ms exact, 182 ms at
-// eps = 0.5 and 130 ms at eps = 2 with the same winner (at 5,000 points eps = 2 kept fewer
-// distinct hypotheses); 1 lies between (docs/global.md was measured with it).
+// The trees' approximate search (beyond kExhaustiveFeaturePairs): a neighbour within (1 + eps)
+// of the nearest's distance is accepted. When the trees served every size, on a turned KITTI pair
+// at 3,000 feature points the global estimate took 199 ms exact, 182 ms at eps = 0.5 and 130 ms
+// at eps = 2 with the same winner (at 5,000 points eps = 2 kept fewer distinct hypotheses); 1
+// lies between.
 constexpr float kEps = 1.0F;
 
 // nanoflann's dataset adaptor over the non-zero descriptors of one cloud.
