@@ -1,6 +1,8 @@
 // Registration without an initial guess (align_global, estimate_global): real clouds turned by
 // known large rotations, seeded reproducibility, a symmetric object reported as ambiguous, and
 // the inputs with no reliable solution (too few points, a plane, a sphere).
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -11,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "global/feature_matching.hpp"
+#include "registration/align_unless.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/global/fpfh.hpp"
 #include "sgdicp/global/global_registration.hpp"
@@ -234,6 +237,33 @@ TEST(Global, SeededRunIsReproducible) {
   EXPECT_EQ(e1.iterations, e2.iterations);
 }
 
+// The race's early end (registration/align_unless.hpp): a test that never accepts leaves the run
+// as align() makes it, one that accepts a pose near the answer ends the run there.
+TEST(Global, ARaceRunEndsWhereItJoinsAPoseAlreadyRefined) {
+  const PointCloud reference = test::synthetic_scene(3, 20000);
+  const Eigen::Matrix4d T_move = test::make_transform(0.2, -0.1, 0.3, Eigen::Vector3d(0.4, 0, 0));
+  const PointCloud source = transformed(reference, T_move);
+  const ReferenceIndex index = reference_index_for(reference, SgdSettings{});
+  const RegistrationResult plain = align(source, index, SgdSettings{});
+  std::size_t asked = 0;
+  const auto kept = detail::align_unless(source, index, SgdSettings{}, Eigen::Matrix4d::Identity(),
+                                         [&](const Eigen::Matrix4d&) { return ++asked, false; });
+  ASSERT_TRUE(kept.has_value());
+  EXPECT_GT(asked, 0U);
+  EXPECT_EQ(kept->T_reference_source, plain.T_reference_source);
+  EXPECT_EQ(kept->iterations, plain.iterations);
+  std::size_t windows = 0;
+  const auto near_answer = [&](const Eigen::Matrix4d& T) {
+    ++windows;
+    return rotation_error_geodesic(T, T_move.inverse()) < 2.0 * kDeg &&
+           translation_error(T, T_move.inverse()) < 0.05;
+  };
+  EXPECT_FALSE(
+      detail::align_unless(source, index, SgdSettings{}, Eigen::Matrix4d::Identity(), near_answer)
+          .has_value());
+  EXPECT_LT(windows, asked) << "ended before the run would have";
+}
+
 TEST(Global, SymmetricObjectIsReportedAmbiguous) {
   // A 1 x 0.6 x 0.3 m box: its four symmetric poses overlap equally, and no answer is given as
   // the solution. The same box with a bump on one face is not ambiguous: the test can fail.
@@ -341,6 +371,104 @@ TEST(Global, SettingsReachTheEstimate) {
   const GlobalEstimate found = estimate_global(source, index);
   EXPECT_GT(found.correspondences, 0U);
   EXPECT_TRUE(found.reliable) << found.message;
+}
+
+// FPFH by its definition, point by point and in double (Rusu et al. 2009): the k nearest
+// within the radius by brute force (ties by index), each point's SPFH from its own pairs, then
+// the SPFH plus the inverse-distance-weighted mean of the neighbours' (eq. 4).
+std::vector<Fpfh> fpfh_by_definition(const PointCloud& cloud, double radius_m, std::size_t k) {
+  const std::size_t n = cloud.size();
+  std::vector<std::vector<std::pair<float, std::uint32_t>>> near(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    for (std::uint32_t j = 0; j < n; ++j) {
+      const float d = (cloud.points[i] - cloud.points[j]).squaredNorm();
+      if (d < static_cast<float>(radius_m * radius_m)) near[i].emplace_back(d, j);
+    }
+    std::sort(near[i].begin(), near[i].end());
+    if (near[i].size() > k + 1) near[i].resize(k + 1);
+    std::erase_if(near[i], [&](const auto& e) { return e.second == i; });
+  }
+  const auto bin = [](double v, double low, double high) {
+    return std::clamp(static_cast<int>((v - low) / (high - low) * 11), 0, 10);
+  };
+  std::vector<std::array<double, 33>> spfh(n, std::array<double, 33>{});
+  for (std::uint32_t i = 0; i < n; ++i) {
+    for (const auto& [d2, j] : near[i]) {
+      Eigen::Vector3d ps = cloud.points[i].cast<double>(), pt = cloud.points[j].cast<double>();
+      Eigen::Vector3d ns = cloud.normals[i].cast<double>(), nt = cloud.normals[j].cast<double>();
+      Eigen::Vector3d line = (pt - ps).normalized();
+      if (std::abs(ns.dot(line)) < std::abs(nt.dot(line))) {
+        std::swap(ps, pt);
+        std::swap(ns, nt);
+        line = -line;
+      }
+      const Eigen::Vector3d v = line.cross(ns).normalized();
+      const Eigen::Vector3d w = ns.cross(v);
+      spfh[i][bin(v.dot(nt), -1, 1)] += 1;
+      spfh[i][11 + bin(ns.dot(line), -1, 1)] += 1;
+      spfh[i][22 + bin(std::atan2(w.dot(nt), ns.dot(nt)), -std::numbers::pi, std::numbers::pi)] +=
+          1;
+    }
+  }
+  const auto normalised = [](std::array<double, 33> h) {
+    for (int part = 0; part < 3; ++part) {
+      double sum = 0;
+      for (int b = 0; b < 11; ++b) sum += h[part * 11 + b];
+      for (int b = 0; b < 11 && sum > 0; ++b) h[part * 11 + b] /= sum;
+    }
+    return h;
+  };
+  for (auto& h : spfh) h = normalised(h);
+  std::vector<Fpfh> out(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    std::array<double, 33> h = spfh[i];
+    std::array<double, 33> others{};
+    double weights = 0;
+    for (const auto& [d2, j] : near[i]) {
+      const double w = 1.0 / std::sqrt(static_cast<double>(d2));
+      weights += w;
+      for (int b = 0; b < 33; ++b) others[b] += w * spfh[j][b];
+    }
+    for (int b = 0; b < 33 && weights > 0; ++b) h[b] += others[b] / weights;
+    h = normalised(h);
+    for (int b = 0; b < 33; ++b) out[i][b] = static_cast<float>(h[b]);
+  }
+  return out;
+}
+
+// compute_fpfh describes each pair once for both of its points: against the definition, with
+// neighbourhoods cut at k (then not every pair is mutual) and not.
+TEST(Fpfh, DescriptorsAreTheDefinitionComputedPointByPoint) {
+  std::mt19937_64 rng(5);
+  PointCloud cloud;
+  for (int i = 0; i < 400; ++i) {  // a sphere and a plane, exact normals
+    const Eigen::Vector3f p = Eigen::Vector3d(test::uniform(rng, -1, 1), test::uniform(rng, -1, 1),
+                                              test::uniform(rng, -1, 1))
+                                  .normalized()
+                                  .cast<float>();
+    cloud.points.push_back(p);
+    cloud.normals.push_back(p);
+    const Eigen::Vector3f q(static_cast<float>(test::uniform(rng, -1, 1)),
+                            static_cast<float>(test::uniform(rng, -1, 1)), -1.2F);
+    cloud.points.push_back(q);
+    cloud.normals.push_back(Eigen::Vector3f(0.2F, 0.0F, 1.0F).normalized());
+  }
+  const ReferenceIndex index(cloud);
+  for (const std::size_t k : {std::size_t{8}, std::size_t{1000}}) {
+    SCOPED_TRACE("k " + std::to_string(k));
+    const auto got = compute_fpfh(cloud, index, {.radius_m = 0.5, .max_neighbors = k});
+    const auto want = fpfh_by_definition(cloud, 0.5, k);
+    ASSERT_EQ(got.size(), want.size());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      double d = 0.0;
+      for (std::size_t b = 0; b < 33; ++b) d += std::abs(got[i][b] - want[i][b]);
+      differ += d > 1e-4 ? 1 : 0;
+    }
+    // Float against double may move an angle across a bin edge now and then; a pair described
+    // for a point whose neighbourhood does not hold it, or not for one that does, moves many.
+    EXPECT_LE(differ, got.size() / 100);
+  }
 }
 
 TEST(Fpfh, DescriptorsAreInvariantToRigidMotion) {

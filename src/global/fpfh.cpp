@@ -4,8 +4,10 @@
 #include "sgdicp/global/fpfh.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -22,16 +24,20 @@ int bin_of(float value, float low, float high) {
   return std::clamp(static_cast<int>(t * kBins), 0, kBins - 1);
 }
 
-// The three angles of a pair (eq. 1-3): the point whose normal makes the smaller angle with the
-// line between them is the source of the frame, so that the features do not depend on order.
-void add_pair(const Eigen::Vector3f& p1, const Eigen::Vector3f& n1, const Eigen::Vector3f& p2,
-              const Eigen::Vector3f& n2, Fpfh& histogram) {
+// The bins of a pair's three angles (eq. 1-3) for point 1's histogram, or none where the pair
+// has no frame. The point whose normal makes the smaller angle with the line between them is
+// the source of the frame, so that the angles do not depend on which point asks; on a tie, the
+// asking point (point 1), and `tied` says so (then point 2's bins differ).
+std::optional<std::array<int, 3>> pair_bins(const Eigen::Vector3f& p1, const Eigen::Vector3f& n1,
+                                            const Eigen::Vector3f& p2, const Eigen::Vector3f& n2,
+                                            bool& tied) {
   Eigen::Vector3f d = p2 - p1;
   const float length = d.norm();
-  if (length <= 0.0F) return;
+  if (length <= 0.0F) return std::nullopt;
   d /= length;
   Eigen::Vector3f u = n1;
   Eigen::Vector3f target_normal = n2;
+  tied = std::abs(n1.dot(d)) == std::abs(n2.dot(d));
   if (std::abs(n1.dot(d)) < std::abs(n2.dot(d))) {  // acos is decreasing: larger |cos| wins
     u = n2;
     target_normal = n1;
@@ -39,16 +45,74 @@ void add_pair(const Eigen::Vector3f& p1, const Eigen::Vector3f& n1, const Eigen:
   }
   Eigen::Vector3f v = d.cross(u);
   const float v_norm = v.norm();
-  if (v_norm <= 1e-12F) return;  // the line lies along the normal: no frame
+  if (v_norm <= 1e-12F) return std::nullopt;  // the line lies along the normal: no frame
   v /= v_norm;
   const Eigen::Vector3f w = u.cross(v);
   const float alpha = v.dot(target_normal);
   const float phi = u.dot(d);
   const float theta = std::atan2(w.dot(target_normal), u.dot(target_normal));
   const auto pi = std::numbers::pi_v<float>;
-  histogram[bin_of(alpha, -1.0F, 1.0F)] += 1.0F;
-  histogram[kBins + bin_of(phi, -1.0F, 1.0F)] += 1.0F;
-  histogram[2 * kBins + bin_of(theta, -pi, pi)] += 1.0F;
+  return std::array<int, 3>{bin_of(alpha, -1.0F, 1.0F), kBins + bin_of(phi, -1.0F, 1.0F),
+                            2 * kBins + bin_of(theta, -pi, pi)};
+}
+
+void add(const std::array<int, 3>& bins, Fpfh& histogram) {
+  for (const int b : bins) histogram[static_cast<std::size_t>(b)] += 1.0F;
+}
+
+// A point's neighbourhood: the nearest within the radius (itself excluded), closest first, ties
+// by index, and the last of the search's list when the search was cut at its k (else none).
+struct Neighborhood {
+  std::vector<Neighbor> kept;
+  std::optional<Neighbor> cut_at;
+
+  // Whether point `index` at squared distance d (within the radius) is in it: the search keeps
+  // every point within the radius up to its cut, in order of (distance, index).
+  [[nodiscard]] bool holds(std::uint32_t index, float d) const {
+    return !cut_at || d < cut_at->squared_distance ||
+           (d == cut_at->squared_distance && index <= cut_at->index);
+  }
+};
+
+std::vector<Neighborhood> neighborhoods_of(const PointCloud& cloud, const ReferenceIndex& index,
+                                           const FpfhSettings& settings) {
+  const auto radius2 = static_cast<float>(settings.radius_m * settings.radius_m);
+  std::vector<Neighborhood> out(cloud.size());
+  std::vector<Neighbor> found;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    index.nearest_within(cloud.points[i], radius2, settings.max_neighbors + 1, found);
+    for (const Neighbor& nb : found) {
+      if (nb.index != i) out[i].kept.push_back(nb);
+    }
+    if (found.size() == settings.max_neighbors + 1) out[i].cut_at = found.back();
+  }
+  return out;
+}
+
+// Every point's SPFH. A pair in both neighbourhoods is described once for both points (the
+// angles do not depend on which point asks, but on a tie): half the angles of the plain loop.
+std::vector<Fpfh> spfh_of(const PointCloud& cloud, const std::vector<Neighborhood>& around) {
+  std::vector<Fpfh> spfh(cloud.size(), Fpfh{});
+  for (std::uint32_t i = 0; i < cloud.size(); ++i) {
+    if (cloud.normals[i].isZero()) continue;
+    for (const Neighbor& nb : around[i].kept) {
+      const std::uint32_t j = nb.index;
+      if (cloud.normals[j].isZero()) continue;
+      const bool mutual = around[j].holds(i, nb.squared_distance);
+      if (j < i && mutual) continue;  // described when j's neighbours were
+      bool tied = false;
+      const auto bins =
+          pair_bins(cloud.points[i], cloud.normals[i], cloud.points[j], cloud.normals[j], tied);
+      if (!bins) continue;
+      add(*bins, spfh[i]);
+      if (!mutual) continue;
+      const auto theirs = tied ? pair_bins(cloud.points[j], cloud.normals[j], cloud.points[i],
+                                           cloud.normals[i], tied)
+                               : bins;
+      if (theirs) add(*theirs, spfh[j]);
+    }
+  }
+  return spfh;
 }
 
 void normalise(Fpfh& h) {
@@ -79,30 +143,14 @@ std::vector<Fpfh> compute_fpfh(const PointCloud& cloud, const ReferenceIndex& in
                                const FpfhSettings& settings) {
   check(cloud, index, settings);
   const std::size_t n = cloud.size();
-  const auto radius2 = static_cast<float>(settings.radius_m * settings.radius_m);
-  // Neighbours within the radius (the point itself excluded), kept for the weighting pass.
-  std::vector<std::vector<Neighbor>> neighborhoods(n);
-  std::vector<Fpfh> spfh(n, Fpfh{});
-  std::vector<Neighbor> found;
-  for (std::size_t i = 0; i < n; ++i) {
-    index.nearest_within(cloud.points[i], radius2, settings.max_neighbors + 1, found);
-    auto& kept = neighborhoods[i];
-    for (const Neighbor& nb : found) {
-      if (nb.index != i) kept.push_back(nb);
-    }
-    if (cloud.normals[i].isZero()) continue;
-    for (const Neighbor& nb : kept) {
-      if (cloud.normals[nb.index].isZero()) continue;
-      add_pair(cloud.points[i], cloud.normals[i], cloud.points[nb.index], cloud.normals[nb.index],
-               spfh[i]);
-    }
-    normalise(spfh[i]);
-  }
+  const std::vector<Neighborhood> around = neighborhoods_of(cloud, index, settings);
+  std::vector<Fpfh> spfh = spfh_of(cloud, around);
+  for (Fpfh& h : spfh) normalise(h);
   std::vector<Fpfh> fpfh(n, Fpfh{});
   for (std::size_t i = 0; i < n; ++i) {
     Fpfh& out = fpfh[i];
     out = spfh[i];
-    const auto& kept = neighborhoods[i];
+    const auto& kept = around[i].kept;
     if (kept.empty()) continue;
     float weight_sum = 0.0F;
     Fpfh others{};

@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include "global/consensus.hpp"
 #include "global/feature_matching.hpp"
+#include "registration/align_unless.hpp"
 #include "sgdicp/core/format_number.hpp"
 #include "sgdicp/global/fpfh.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
@@ -183,14 +185,21 @@ std::vector<RegistrationResult> race(GlobalEstimate& e, const PointCloud& source
   for (std::size_t k = 0; k < e.hypotheses.size() && k < g.refined_hypotheses; ++k) {
     const GlobalHypothesis& h = e.hypotheses[k];
     if (k > 0 && h.score < 0.5 * best) break;
-    RegistrationResult r = align(source, reference, settings, h.T_reference_source);
+    // A run that comes within the same-pose distance of a pose already refined would converge
+    // onto it: it ends there (on the bunny most runners-up do, within a few windows).
+    const auto joins_refined = [&](const Eigen::Matrix4d& T) {
+      return std::any_of(refined.begin(), refined.end(), [&](const GlobalHypothesis& o) {
+        return !detail::distinct(o.T_reference_source, T, rule);
+      });
+    };
+    std::optional<RegistrationResult> run =
+        detail::align_unless(source, reference, settings, h.T_reference_source, joins_refined);
+    if (!run) continue;
+    RegistrationResult& r = *run;
+    if (joins_refined(r.T_reference_source)) continue;  // converged onto it all the same
     const double fine =
         overlap_fraction(source_grid, reference, between_stored(r.T_reference_source, o_s, o_r),
                          g.fine_distance_voxels * e.feature_voxel_m, kScorePoints);
-    const auto same = std::find_if(refined.begin(), refined.end(), [&](const GlobalHypothesis& o) {
-      return !detail::distinct(o.T_reference_source, r.T_reference_source, rule);
-    });
-    if (same != refined.end()) continue;  // converged onto a pose already refined
     refined.push_back({r.T_reference_source, h.consensus, h.consensus_rank, fine});
     results.push_back(std::move(r));
   }

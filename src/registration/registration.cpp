@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
 
 #include "index/nearest_memory.hpp"
+#include "registration/align_unless.hpp"
 #include "registration/solver_support.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/pose.hpp"
@@ -282,8 +284,10 @@ class SgdRun {
   }
 
   // Runs from theta until converged, stopped or out of iterations (the reason goes into
-  // result); returns the pose to report, in the scaled space.
-  PoseVector minimise(PoseVector theta, RegistrationResult& result) {
+  // result); returns the pose to report, in the scaled space. `abandon` (when set) reads theta
+  // at the end of each window: true ends the run there, abandoned() then says so.
+  PoseVector minimise(PoseVector theta, RegistrationResult& result,
+                      const std::function<bool(const PoseVector&)>& abandon = {}) {
     const std::size_t m = settings_.sampling.batch_size;
     for (std::size_t it = 0; it < settings_.max_iterations; ++it) {
       sampler_.next_batch(m, batch_);  // line 2
@@ -298,6 +302,10 @@ class SgdRun {
       if (stopped(theta, cost.pairs(), result)) return theta;
       const WindowTest test = monitor_.update(gradient, step, cost.pairs(), theta);
       if (test == WindowTest::incomplete) continue;
+      if (abandon && abandon(theta)) {
+        abandoned_ = true;
+        return theta;
+      }
       schedule_.end_window();
       if (test == WindowTest::moving) continue;
       ++result.stages;
@@ -349,6 +357,7 @@ class SgdRun {
 
   // d_max at the end of the run, scaled.
   [[nodiscard]] double max_distance() const { return schedule_.max_distance(); }
+  [[nodiscard]] bool abandoned() const { return abandoned_; }
 
  private:
   void record(const PoseVector& theta, const CostAccumulator& cost, RegistrationResult& result) {
@@ -393,12 +402,21 @@ class SgdRun {
   std::vector<std::uint32_t> batch_;
   std::vector<float> distances_;
   std::size_t empty_batches_ = 0;
+  bool abandoned_ = false;
 };
 
 }  // namespace
 
 RegistrationResult align(const PointCloud& source, const ReferenceIndex& reference,
                          const SgdSettings& settings, const Eigen::Matrix4d& T_init) {
+  return *detail::align_unless(source, reference, settings, T_init, {});
+}
+
+std::optional<RegistrationResult> detail::align_unless(const PointCloud& source,
+                                                       const ReferenceIndex& reference,
+                                                       const SgdSettings& settings,
+                                                       const Eigen::Matrix4d& T_init,
+                                                       const AbandonTest& abandon) {
   const detail::Stopwatch clock;
   settings.validate();
   detail::check_pair(reference, settings.cost, T_init, detail::SurfaceEstimation::lazy);
@@ -427,7 +445,13 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
   // Matrices read from text carry few digits: project onto the nearest rotation.
   const PoseVector theta_init =
       pose_from_transform(scaling.to_scaled(frame.to_stored(orthonormalized(T_init))));
-  PoseVector theta = run.minimise(theta_init, result);
+  const auto in_clouds = [&](const PoseVector& th) {
+    return frame.to_clouds(scaling.to_metric(transform_from_pose(th)));
+  };
+  std::function<bool(const PoseVector&)> give_up;
+  if (abandon) give_up = [&](const PoseVector& th) { return abandon(in_clouds(th)); };
+  PoseVector theta = run.minimise(theta_init, result, give_up);
+  if (run.abandoned()) return std::nullopt;
   // The uncertainty of any pose the run reports as its estimate (a pose that blew up or lost its
   // pairs has none).
   if (settings.uncertainty.method != UncertaintyType::none &&
@@ -436,9 +460,7 @@ RegistrationResult align(const PointCloud& source, const ReferenceIndex& referen
         [&run](const auto& batch, const PoseVector& th, bool h) {
           return run.cost_at(batch, th, h);
         },
-        [&](const PoseVector& th) {
-          return pose_from_transform(frame.to_clouds(scaling.to_metric(transform_from_pose(th))));
-        },
+        [&](const PoseVector& th) { return pose_from_transform(in_clouds(th)); },
         &src.cloud(),
         &reference,
         &scaling,
