@@ -24,6 +24,38 @@ int bin_of(float value, float low, float high) {
   return std::clamp(static_cast<int>(t * kBins), 0, kBins - 1);
 }
 
+// The directions of the inner edges of the angle bins over (-pi, pi], the lower half first:
+// -pi + 2 pi k / kBins for k = 1 .. kBins - 1.
+struct AngleEdges {
+  std::array<float, kBins - 1> cos{}, sin{};
+  AngleEdges() {
+    for (int k = 1; k < kBins; ++k) {
+      const double edge = std::numbers::pi * (2.0 * k / kBins - 1.0);
+      cos[k - 1] = static_cast<float>(std::cos(edge));
+      sin[k - 1] = static_cast<float>(std::sin(edge));
+    }
+  }
+};
+
+// bin_of(atan2(y, x), -pi, pi) without the atan2 (a third of the pair's work): the edges at or
+// below the angle, counted by the side of each edge's direction the vector (x, y) lies on,
+// within its half plane (where that side orders angles). The sign bit of y picks the half, as
+// atan2 does for -0.
+int angle_bin(float y, float x) {
+  static_assert(kBins % 2 == 1, "no edge at 0: each half plane holds (kBins - 1) / 2 edges");
+  if (x == 0.0F && y == 0.0F) {  // atan2's signed zeros
+    return bin_of(std::atan2(y, x), -std::numbers::pi_v<float>, std::numbers::pi_v<float>);
+  }
+  static const AngleEdges edges;
+  constexpr int kHalf = (kBins - 1) / 2;
+  const int first = std::signbit(y) ? 0 : kHalf;
+  int bin = first;
+  for (int k = first; k < first + kHalf; ++k) {
+    bin += edges.cos[k] * y - edges.sin[k] * x >= 0.0F ? 1 : 0;
+  }
+  return bin;
+}
+
 // The bins of a pair's three angles (eq. 1-3) for point 1's histogram, or none where the pair
 // has no frame. The point whose normal makes the smaller angle with the line between them is
 // the source of the frame, so that the angles do not depend on which point asks; on a tie, the
@@ -50,10 +82,9 @@ std::optional<std::array<int, 3>> pair_bins(const Eigen::Vector3f& p1, const Eig
   const Eigen::Vector3f w = u.cross(v);
   const float alpha = v.dot(target_normal);
   const float phi = u.dot(d);
-  const float theta = std::atan2(w.dot(target_normal), u.dot(target_normal));
-  const auto pi = std::numbers::pi_v<float>;
-  return std::array<int, 3>{bin_of(alpha, -1.0F, 1.0F), kBins + bin_of(phi, -1.0F, 1.0F),
-                            2 * kBins + bin_of(theta, -pi, pi)};
+  return std::array<int, 3>{
+      bin_of(alpha, -1.0F, 1.0F), kBins + bin_of(phi, -1.0F, 1.0F),
+      2 * kBins + angle_bin(w.dot(target_normal), u.dot(target_normal))};  // theta
 }
 
 void add(const std::array<int, 3>& bins, Fpfh& histogram) {
