@@ -21,8 +21,12 @@ reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: 
 sgd_icp.read_points / read_depth_image; KISS-ICP reads the .bin with NumPy and decodes the depth
 PNG with Pillow and back-projects it in NumPy (its own loaders do the same).
 
+Threads: `--threads N` (default 1) is sgd-icp's `threads=` (its registration, each mini-batch's
+queries in two halves from 2, and the surfaces of a frame's points that enter the map) and
+KISS-ICP's `max_num_threads`: both sides on the same number of threads.
+
 KISS-ICP (pip kiss-icp) is configured for each sensor: deskewing off (the scans come without
-per-point times and sgd-icp does not deskew), one thread (as sgd-icp); max range 100 m for
+per-point times and sgd-icp does not deskew); max range 100 m for
 LiDAR (its default), 5 m for the Kinect with initial threshold 0.1 m and min motion 0.005 m (its
 LiDAR defaults, 2 m and 0.1 m, are larger than the whole motion); voxel its own rule (max range /
 100), and with --kiss-our-voxel once more with sgd-icp's voxel size. sgd-icp runs with its
@@ -185,9 +189,9 @@ def kiss_reader(seq: Sequence) -> Callable[[Path], np.ndarray]:
     return read
 
 
-def run_ours(seq: Sequence, method: str) -> tuple[np.ndarray, float, float, int]:
+def run_ours(seq: Sequence, method: str, threads: int) -> tuple[np.ndarray, float, float, int]:
     start = time.perf_counter()
-    odometry = sgd_icp.Odometry(method=method)
+    odometry = sgd_icp.Odometry(method=method, threads=threads)
     for f in seq.files:
         odometry.register_frame(
             sgd_icp.read_depth_image(f, seq.intrinsics) if seq.kinect else sgd_icp.read_points(f)
@@ -196,13 +200,13 @@ def run_ours(seq: Sequence, method: str) -> tuple[np.ndarray, float, float, int]
     return odometry.poses, wall, odometry.voxel_size, odometry.recovered_frames
 
 
-def run_kiss(seq: Sequence, voxel_size: float | None) -> tuple[np.ndarray, float]:
+def run_kiss(seq: Sequence, voxel_size: float | None, threads: int) -> tuple[np.ndarray, float]:
     from kiss_icp.config import load_config
     from kiss_icp.kiss_icp import KissICP
 
     config = load_config(None)
     config.data.deskew = False
-    config.registration.max_num_threads = 1
+    config.registration.max_num_threads = threads
     if seq.kinect:
         config.data.max_range = 5.0
         config.mapping.voxel_size = 0.05
@@ -242,6 +246,8 @@ def main() -> None:
     parser.add_argument("--steps", default="1", help="frame steps, comma-separated [default: 1]")
     parser.add_argument("--max-frames", type=int, default=0, help="frames per run [default: 0 = all]")
     parser.add_argument("--no-kiss", action="store_true", help="sgd-icp only")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="sgd-icp's num_threads and KISS-ICP's max_num_threads [default: 1]")
     parser.add_argument("--kiss-our-voxel", action="store_true",
                         help="also run KISS-ICP with sgd-icp's voxel size (on the hand-held LiDAR's "
                         "0.21 m it runs 2.5-13 s per frame and loses 16-31 frames)")
@@ -252,11 +258,11 @@ def main() -> None:
             seq = open_sequence(folder, step, args.max_frames)
             voxel = None
             for method in args.methods.split(","):
-                poses, wall, voxel, recovered = run_ours(seq, method)
+                poses, wall, voxel, recovered = run_ours(seq, method, args.threads)
                 m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
                 rows.append((seq.name, f"sgd-icp {method}", m, wall, f"voxel {voxel:.3f} m, {recovered} recovered"))
             for v in [] if args.no_kiss else [None] + ([voxel] if args.kiss_our_voxel else []):
-                poses, wall = run_kiss(seq, v)
+                poses, wall = run_kiss(seq, v, args.threads)
                 m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
                 rows.append((seq.name, "KISS-ICP", m, wall, "its voxel rule" if v is None else f"voxel {v:.3f} m"))
             print(f"{seq.name}: {len(seq.files)} frames done", flush=True)

@@ -430,9 +430,18 @@ TEST(Odometry, AFrameOfAnotherSceneIsLostWithoutPoisoningTheTrack) {
 TEST(Odometry, SameSeedSameTrajectory) {
   const auto seq = test::synthetic_sequence(6, 0.4, 1.0, 5, 6000);
   Odometry a, b;
+  SgdSettings two_threads;
+  two_threads.num_threads = 2;  // the queries and the map's surfaces in two halves
+  Odometry c({}, "sgd", two_threads);
   for (const auto& f : seq.frames) {
-    EXPECT_TRUE(a.register_frame(f) == b.register_frame(f));
+    const Eigen::Matrix4d T = a.register_frame(f);
+    EXPECT_TRUE(T == b.register_frame(f));
+    EXPECT_TRUE(T == c.register_frame(f)) << "the same for any thread count";
   }
+  ASSERT_NE(a.map(), nullptr);
+  ASSERT_NE(c.map(), nullptr);
+  EXPECT_EQ(a.map()->points().points, c.map()->points().points);
+  EXPECT_EQ(a.map()->points().covariances, c.map()->points().covariances);
 }
 
 // ---- real data

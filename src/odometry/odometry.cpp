@@ -429,7 +429,11 @@ void Odometry::add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T) {
   }
   // The frame (voxel_downsample's output) carries no surfaces yet: moving it moves points only.
   const std::vector<std::uint32_t> admitted = map_->admitted(transformed(frame, T));
-  map_->add(transformed(subset_with_surfaces(frame, admitted, neighborhood(), covariances), T));
+  // On the registration's threads (--threads), as everything else of a frame: not on every core
+  // whatever the setting (NeighborhoodSettings' own default), which made one thread two.
+  NeighborhoodSettings surfaces = neighborhood();
+  surfaces.num_threads = method_->solver == Solver::sgd ? sgd_.num_threads : batch_.num_threads;
+  map_->add(transformed(subset_with_surfaces(frame, admitted, surfaces, covariances), T));
 }
 
 Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame,
