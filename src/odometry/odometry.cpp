@@ -234,13 +234,13 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     report.message = "no point within the range limits";
     return finish(report, PointCloud{}, started);
   }
-  const PointCloud map_frame = voxel_downsample(cropped, 0.5 * voxel_size_m_);
+  const PointCloud map_frame = voxel_downsample(cropped, 0.5 * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
     report.message = poses_.empty() ? "first frame" : "map restarted (no map before)";
     return finish(report, map_frame, started);
   }
-  const PointCloud source = voxel_downsample(map_frame, 1.5 * voxel_size_m_);
+  const PointCloud source = voxel_downsample(map_frame, 1.5 * voxel_size_m_, threads());
   report.source_points = source.size();
 
   const double build_start = now_ms();
@@ -414,6 +414,10 @@ CostType Odometry::cost() const {
   return method_->solver == Solver::sgd ? sgd_.cost : batch_.cost;
 }
 
+std::size_t Odometry::threads() const {
+  return method_->solver == Solver::sgd ? sgd_.num_threads : batch_.num_threads;
+}
+
 const NeighborhoodSettings& Odometry::neighborhood() const {
   return method_->solver == Solver::sgd ? sgd_.neighborhood : batch_.neighborhood;
 }
@@ -432,7 +436,7 @@ void Odometry::add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T) {
   // On the registration's threads (--threads), as everything else of a frame: not on every core
   // whatever the setting (NeighborhoodSettings' own default), which made one thread two.
   NeighborhoodSettings surfaces = neighborhood();
-  surfaces.num_threads = method_->solver == Solver::sgd ? sgd_.num_threads : batch_.num_threads;
+  surfaces.num_threads = threads();
   map_->add(transformed(subset_with_surfaces(frame, admitted, surfaces, covariances), T));
 }
 

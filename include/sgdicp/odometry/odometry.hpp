@@ -261,6 +261,8 @@ class Odometry {
   void add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T);
   [[nodiscard]] CostType cost() const;
   [[nodiscard]] const NeighborhoodSettings& neighborhood() const;
+  // The registration's thread count: every step of a frame runs on it (--threads).
+  [[nodiscard]] std::size_t threads() const;
 
   OdometrySettings settings_;
   const Method* method_;
