@@ -134,8 +134,7 @@ std::vector<Fpfh> spfh_of(const PointCloud& cloud, const std::vector<Neighborhoo
       bool tied = false;
       const auto bins =
           pair_bins(cloud.points[i], cloud.normals[i], cloud.points[j], cloud.normals[j], tied);
-      if (!bins) continue;
-      add(*bins, spfh[i]);
+      if (bins) add(*bins, spfh[i]);
       if (!mutual) continue;
       const auto theirs = tied ? pair_bins(cloud.points[j], cloud.normals[j], cloud.points[i],
                                            cloud.normals[i], tied)
