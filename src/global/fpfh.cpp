@@ -69,8 +69,10 @@ std::optional<std::array<int, 3>> pair_bins(const Eigen::Vector3f& p1, const Eig
   d /= length;
   Eigen::Vector3f u = n1;
   Eigen::Vector3f target_normal = n2;
-  tied = std::abs(n1.dot(d)) == std::abs(n2.dot(d));
-  if (std::abs(n1.dot(d)) < std::abs(n2.dot(d))) {  // acos is decreasing: larger |cos| wins
+  const float cos1 = std::abs(n1.dot(d));
+  const float cos2 = std::abs(n2.dot(d));
+  tied = cos1 == cos2;
+  if (cos1 < cos2) {  // acos is decreasing: larger |cos| wins
     u = n2;
     target_normal = n1;
     d = -d;
