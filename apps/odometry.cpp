@@ -62,6 +62,10 @@ OdometrySettings odometry_settings(const OdometryOptions& o) {
   // A d_max given on the command line is used as is, every frame.
   s.adaptive_threshold = !o.settings.values.contains("max-distance");
   s.step_within_threshold = !o.settings.values.contains("learning-rate");
+  // A step rule chosen on the command line is used from every start.
+  s.tracking_gauss_newton = !o.settings.values.contains("optimizer") &&
+                            !o.settings.preconditioner.has_value() &&
+                            !o.settings.values.contains("learning-rate");
   return s;
 }
 
@@ -335,11 +339,12 @@ void add_odometry_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "odometry",
       "Scan-to-map odometry over a folder of frames: each frame registered to a local voxel map "
-      "of the frames before it, from a constant-velocity prediction. Writes the pose of every "
-      "frame in the first frame's coordinates (docs/odometry.md). The registration options below "
-      "apply to each frame; giving --max-distance fixes d_max (no adaptive threshold), giving "
-      "--learning-rate keeps it uncapped (Adam and RMSProp steps are otherwise capped at d_max / "
-      "4).");
+      "of the frames before it, from a predicted pose. Writes the pose of every frame in the "
+      "first frame's coordinates (docs/odometry.md). The registration options below apply to "
+      "each frame; giving --max-distance fixes d_max (no adaptive threshold). The registrations "
+      "from the prediction and the last pose take Gauss-Newton steps unless --optimizer, "
+      "--preconditioner or --learning-rate is given; giving --learning-rate keeps it uncapped "
+      "(Adam and RMSProp steps are otherwise capped at d_max / 4).");
   cmd->add_option("INPUT", o->input,
                   "Folder of frames, sorted by name: point clouds of one format (.pcd .ply .bin "
                   ".xyz .txt .csv .vtk .f32), a KITTI sequence folder (velodyne/*.bin, "

@@ -20,6 +20,8 @@ OdometrySettings take_odometry_keywords(py::dict& overrides) {
   OdometrySettings s = take_keywords(OdometrySettings{}, overrides, odometry_settings_table());
   s.adaptive_threshold = !overrides.contains("max_distance");
   s.step_within_threshold = !overrides.contains("learning_rate");
+  s.tracking_gauss_newton =
+      !overrides.contains("optimizer") && !overrides.contains("learning_rate");
   return s;
 }
 

@@ -160,3 +160,24 @@ def test_cli_and_python_give_the_same_trajectory(tmp_path):
     for f in sorted((KITTI / "velodyne").glob("*.bin")):
         odometry.register_frame(sgd_icp.read_points(f))
     np.testing.assert_allclose(odometry.poses[:, :3, :], cli_poses, atol=1e-6)
+
+
+@pytest.mark.skipif(not (KITTI / "velodyne").is_dir(), reason="no KITTI scans in ../shared/data")
+def test_a_chosen_step_rule_is_used_from_every_start(tmp_path):
+    """Tracking takes Gauss-Newton steps unless a step rule is given: `--optimizer adam` and
+    optimizer="adam" then give Adam's trajectory, the same in the CLI and in Python, and not the
+    default's."""
+    cli = find_cli()
+    if cli is None:
+        pytest.skip("no sgdicp binary (set SGDICP_BIN)")
+    out = tmp_path / "poses.txt"
+    subprocess.run([str(cli), "odometry", str(KITTI), "--poses-out", str(out), "-q",
+                    "--optimizer", "adam"], check=True, capture_output=True)
+    cli_poses = np.loadtxt(out).reshape(-1, 3, 4)
+    adam, default = sgd_icp.Odometry(optimizer="adam"), sgd_icp.Odometry()
+    for f in sorted((KITTI / "velodyne").glob("*.bin")):
+        cloud = sgd_icp.read_points(f)
+        adam.register_frame(cloud)
+        default.register_frame(cloud)
+    np.testing.assert_allclose(adam.poses[:, :3, :], cli_poses, atol=1e-6)
+    assert np.abs(default.poses - adam.poses).max() > 1e-6

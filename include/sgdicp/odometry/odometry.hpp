@@ -70,6 +70,15 @@ struct OdometrySettings {
   /// correspondence (false: the settings' learning rate as is; the CLI and Python set it when
   /// --learning-rate is given). docs/odometry.md.
   bool step_within_threshold = true;
+  /// The registrations that track (from the prediction or the last registered pose) take
+  /// Gauss-Newton steps in their coarse stage while the optimizer is the default Adam, as the
+  /// refinement stages do: their start lies within the point-to-point basin, where a Newton step
+  /// converges in a few mini-batches and Adam's steps of one length took 80-260 (the coarse stage
+  /// was half of a hand-held LiDAR run's time; docs/design.md, *Tracking with Gauss-Newton
+  /// steps*). The wide-basin retry keeps the optimizer (false: the settings' optimizer for every
+  /// start; the CLI sets it when --optimizer, --preconditioner or --learning-rate is given,
+  /// Python when optimizer= or learning_rate= is).
+  bool tracking_gauss_newton = true;
 
   /// Throws InvalidSettingsError naming the first setting out of range (odometry_settings_table),
   /// spelled as `names` says.
