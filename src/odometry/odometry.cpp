@@ -36,6 +36,14 @@ Eigen::Matrix4d rigid_inverse(const Eigen::Matrix4d& T) {
   return out;
 }
 
+// What enters the map is the frame thinned to one centroid per this many map voxels; what is
+// registered, per kSourceThinning. KISS-ICP thins the map's frame to half a voxel; a point here
+// carries its own normal, and three quarters measured as precise or more at 10-15 % less time
+// on every shared sequence and rate (a centroid of more points is a less noisy one; docs/design.md,
+// *The map's frame at three quarters of a voxel*).
+constexpr double kMapThinning = 0.75;
+constexpr double kSourceThinning = 1.5;
+
 // The 99th percentile of the point distances from the sensor (at most 20 000 points looked at).
 double range_percentile_m(const PointCloud& cloud) {
   if (cloud.empty()) return 0.0;
@@ -234,13 +242,13 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     report.message = "no point within the range limits";
     return finish(report, PointCloud{}, started);
   }
-  const PointCloud map_frame = voxel_downsample(cropped, 0.5 * voxel_size_m_, threads());
+  const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
     report.message = poses_.empty() ? "first frame" : "map restarted (no map before)";
     return finish(report, map_frame, started);
   }
-  const PointCloud source = voxel_downsample(map_frame, 1.5 * voxel_size_m_, threads());
+  const PointCloud source = voxel_downsample(map_frame, kSourceThinning * voxel_size_m_, threads());
   report.source_points = source.size();
 
   const double build_start = now_ms();

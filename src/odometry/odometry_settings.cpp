@@ -25,7 +25,7 @@ std::vector<Setting<S>> make_table() {
           {"min-range", "min_range_m", kLength, "m", "Points closer to the sensor are dropped"}),
       setting<S, &S::voxel_size_m>(
           {"voxel-size", "voxel_size_m", kLength, "m",
-           "Map voxel side (frames thinned to half of it for the map, 1.5 times it for the "
+           "Map voxel side (frames thinned to 0.75 of it for the map, 1.5 times it for the "
            "registration); 0 = 1 % of the first frame's 99th-percentile range"}),
       setting<S, &S::max_points_per_voxel>({"max-points-per-voxel",
                                             "max_points_per_voxel",

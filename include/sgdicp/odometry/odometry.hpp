@@ -44,7 +44,7 @@ struct OdometrySettings {
   double min_range_m = 0.0;
   /// Side of the map's voxels; 0 = 1 % of the first frame's range (its 99th percentile point
   /// distance from the sensor, at most max_range_m): 0.5-0.8 m on KITTI, 3-4 cm on a Kinect.
-  /// Frames are thinned to one point per half voxel for the map and per 1.5 voxels for the
+  /// Frames are thinned to one point per 0.75 voxel for the map and per 1.5 voxels for the
   /// registration.
   double voxel_size_m = 0.0;
   /// Points kept per voxel of the map.
