@@ -21,6 +21,9 @@ reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: 
 sgd_icp.read_points / read_depth_image; KISS-ICP reads the .bin with NumPy and decodes the depth
 PNG with Pillow and back-projects it in NumPy (its own loaders do the same).
 
+Timing: `--repeats N` runs each side N times per sequence, alternating, and reports the median
+wall time (and the ratio of ours to KISS-ICP's); the machine is shared, so one run decides little.
+
 Threads: `--threads N` (default 1) is sgd-icp's `threads=` (its registration, each mini-batch's
 queries in two halves from 2, and the surfaces of a frame's points that enter the map) and
 KISS-ICP's `max_num_threads`: both sides on the same number of threads.
@@ -236,7 +239,7 @@ def print_table(rows: list[tuple[str, str, dict[str, Any], float, str]]) -> None
               f"{m['rpe_r_rmse_deg']:.3f} | {m['end_percent']:.2f} / {m['end_deg']:.2f} | "
               f"{' / '.join(f'{x:.2f}' for x in m['segments_percent'])} | "
               f"{1e3 * m['ate_m']:.1f} | "
-              f"{wall:.1f} ({1e3 * wall / m['frames']:.0f}) | {notes} |")
+              f"{wall:.2f} ({1e3 * wall / m['frames']:.0f}) | {notes} |")
 
 
 def main() -> None:
@@ -251,20 +254,41 @@ def main() -> None:
     parser.add_argument("--kiss-our-voxel", action="store_true",
                         help="also run KISS-ICP with sgd-icp's voxel size (on the hand-held LiDAR's "
                         "0.21 m it runs 2.5-13 s per frame and loses 16-31 frames)")
+    parser.add_argument("--repeats", type=int, default=1,
+                        help="runs of each side per sequence, alternating; the median wall time is "
+                        "reported (the errors are the first run's) [default: 1]")
     args = parser.parse_args()
     rows = []
     for folder in args.folders:
         for step in (int(s) for s in args.steps.split(",")):
             seq = open_sequence(folder, step, args.max_frames)
-            voxel = None
-            for method in args.methods.split(","):
-                poses, wall, voxel, recovered = run_ours(seq, method, args.threads)
-                m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
-                rows.append((seq.name, f"sgd-icp {method}", m, wall, f"voxel {voxel:.3f} m, {recovered} recovered"))
-            for v in [] if args.no_kiss else [None] + ([voxel] if args.kiss_our_voxel else []):
-                poses, wall = run_kiss(seq, v, args.threads)
-                m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
-                rows.append((seq.name, "KISS-ICP", m, wall, "its voxel rule" if v is None else f"voxel {v:.3f} m"))
+            sides: dict[str, tuple[dict[str, Any], list[float], str]] = {}
+
+            def timed(name: str, run: Callable[[], tuple[np.ndarray, float]], notes: str) -> None:
+                poses, wall = run()
+                if name not in sides:
+                    m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
+                    sides[name] = (m, [], notes)
+                sides[name][1].append(wall)
+
+            for _ in range(max(args.repeats, 1)):
+                voxel = None
+                for method in args.methods.split(","):
+                    poses, wall, voxel, recovered = run_ours(seq, method, args.threads)
+                    timed(f"sgd-icp {method}", lambda: (poses, wall),
+                          f"voxel {voxel:.3f} m, {recovered} recovered")
+                for v in [] if args.no_kiss else [None] + ([voxel] if args.kiss_our_voxel else []):
+                    timed("KISS-ICP" if v is None else f"KISS-ICP voxel {v:.3f} m",
+                          lambda v=v: run_kiss(seq, v, args.threads),
+                          "its voxel rule" if v is None else f"voxel {v:.3f} m")
+            kiss_wall = float(np.median(sides["KISS-ICP"][1])) if "KISS-ICP" in sides else None
+            for name, (m, walls, notes) in sides.items():
+                wall = float(np.median(walls))
+                if name.startswith("sgd-icp") and kiss_wall:
+                    notes += f", wall {wall / kiss_wall:.2f}x KISS-ICP's"
+                if len(walls) > 1:
+                    notes += f", wall s of {len(walls)} runs: " + " ".join(f"{w:.2f}" for w in walls)
+                rows.append((seq.name, name, m, wall, notes))
             print(f"{seq.name}: {len(seq.files)} frames done", flush=True)
     print_table(rows)
 
