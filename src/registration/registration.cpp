@@ -344,10 +344,7 @@ class SgdRun {
         optimizer_.settings().type == OptimizerType::gauss_newton) {
       return;
     }
-    OptimizerSettings newton = settings_.optimizer;
-    newton.type = OptimizerType::gauss_newton;
-    newton.learning_rate = default_learning_rate(OptimizerType::gauss_newton);
-    optimizer_ = Optimizer(newton);
+    optimizer_ = Optimizer(with_gauss_newton_steps(settings_.optimizer));
   }
 
   // The normal of reference point i, from the cloud or estimated once (as the plane costs do).

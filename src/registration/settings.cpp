@@ -59,10 +59,7 @@ OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_
       !is_small_source(settings, source_points)) {
     return settings.optimizer;
   }
-  OptimizerSettings gauss_newton = settings.optimizer;
-  gauss_newton.type = OptimizerType::gauss_newton;
-  gauss_newton.learning_rate = default_learning_rate(OptimizerType::gauss_newton);
-  return gauss_newton;
+  return with_gauss_newton_steps(settings.optimizer);
 }
 
 std::size_t min_source_points(const SgdSettings& settings) {

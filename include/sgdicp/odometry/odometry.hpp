@@ -71,7 +71,8 @@ struct OdometrySettings {
   /// --learning-rate is given). docs/odometry.md.
   bool step_within_threshold = true;
   /// The registrations that track (from the prediction or the last registered pose) take
-  /// Gauss-Newton steps in their coarse stage while the optimizer is the default Adam, as the
+  /// Gauss-Newton steps in their coarse stage while the step rule is the default (Adam at its
+  /// own step; the other optimizer parameters kept, as with_gauss_newton_steps does), as the
   /// refinement stages do: their start lies within the point-to-point basin, where a Newton step
   /// converges in a few mini-batches and Adam's steps of one length took 80-260 (the coarse stage
   /// was half of a hand-held LiDAR run's time; docs/design.md, *Tracking with Gauss-Newton

@@ -82,6 +82,15 @@ struct OptimizerSettings {
   bool operator==(const OptimizerSettings&) const = default;
 };
 
+/// `settings` stepping with Gauss-Newton at its own step, its other parameters kept (the damping
+/// and the Hessian's decay are Gauss-Newton's): the step of the refinement stages, of a small
+/// source's coarse stage and of the odometry's tracking.
+[[nodiscard]] inline OptimizerSettings with_gauss_newton_steps(OptimizerSettings settings) {
+  settings.type = OptimizerType::gauss_newton;
+  settings.learning_rate = default_learning_rate(OptimizerType::gauss_newton);
+  return settings;
+}
+
 /// The state of one optimiser run. step() returns the increment to add to theta.
 class Optimizer {
  public:
