@@ -264,8 +264,7 @@ def main() -> None:
             seq = open_sequence(folder, step, args.max_frames)
             sides: dict[str, tuple[dict[str, Any], list[float], str]] = {}
 
-            def timed(name: str, run: Callable[[], tuple[np.ndarray, float]], notes: str) -> None:
-                poses, wall = run()
+            def record(name: str, poses: np.ndarray, wall: float, notes: str) -> None:
                 if name not in sides:
                     m = metrics(poses, seq.reference) | {"frames": len(seq.files)}
                     sides[name] = (m, [], notes)
@@ -275,12 +274,12 @@ def main() -> None:
                 voxel = None
                 for method in args.methods.split(","):
                     poses, wall, voxel, recovered = run_ours(seq, method, args.threads)
-                    timed(f"sgd-icp {method}", lambda: (poses, wall),
-                          f"voxel {voxel:.3f} m, {recovered} recovered")
+                    record(f"sgd-icp {method}", poses, wall,
+                           f"voxel {voxel:.3f} m, {recovered} recovered")
                 for v in [] if args.no_kiss else [None] + ([voxel] if args.kiss_our_voxel else []):
-                    timed("KISS-ICP" if v is None else f"KISS-ICP voxel {v:.3f} m",
-                          lambda v=v: run_kiss(seq, v, args.threads),
-                          "its voxel rule" if v is None else f"voxel {v:.3f} m")
+                    poses, wall = run_kiss(seq, v, args.threads)
+                    record("KISS-ICP" if v is None else f"KISS-ICP voxel {v:.3f} m", poses, wall,
+                           "its voxel rule" if v is None else f"voxel {v:.3f} m")
             kiss_wall = float(np.median(sides["KISS-ICP"][1])) if "KISS-ICP" in sides else None
             for name, (m, walls, notes) in sides.items():
                 wall = float(np.median(walls))
