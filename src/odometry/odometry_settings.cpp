@@ -41,9 +41,9 @@ std::vector<Setting<S>> make_table() {
            "Deviations from the prediction below this do not adapt the threshold; 0 = voxel / "
            "10"}),
       setting<S, &S::max_translation_per_frame_m>(
-          {"max-translation-per-frame", "max_translation_per_frame_m", kPositiveLength, "m",
+          {"max-translation-per-frame", "max_translation_per_frame_m", kLength, "m",
            "A registered motion between consecutive frames beyond this is rejected and "
-           "retried"}),
+           "retried; 0 = the frame's own range (99 % of its points lie within it)"}),
       setting<S, &S::max_rotation_per_frame_deg>(
           {"max-rotation-per-frame",
            "max_rotation_per_frame_deg",

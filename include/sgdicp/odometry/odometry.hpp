@@ -56,11 +56,15 @@ struct OdometrySettings {
   /// standing sensor would shrink it to nothing); 0 = voxel / 10.
   double min_motion_m = 0.0;
   /// Physical bounds of the motion between consecutive frames: a registration beyond either is
-  /// rejected (and retried). 5 m per frame is 180 km/h at 10 Hz. No bound on rotation by
-  /// default: a hand-held sensor turns 54 deg between scans at 1 Hz and 62 deg at 0.67 Hz
-  /// (../shared/data/balm_handheld_lidar), and a 45 deg bound rejected those correct
-  /// registrations and lost the track; a wrong one is caught by its overlap with the map.
-  double max_translation_per_frame_m = 5.0;
+  /// rejected (and retried). Translation: 0 = the frame's own range (the distance within which
+  /// 99 % of its points lie): a sensor does not move farther than it sees between two frames,
+  /// whatever the frame rate. A bound in metres assumes one: 5 m (180 km/h at 10 Hz) rejected
+  /// the correct 5.2-5.9 m steps of a hand-held LiDAR read every seventh scan and lost those
+  /// frames. No bound on rotation by default: a hand-held sensor turns 54 deg between scans at
+  /// 1 Hz and 62 deg at 0.67 Hz (../shared/data/balm_handheld_lidar), and a 45 deg bound rejected
+  /// those correct registrations and lost the track; a wrong one is caught by its overlap with
+  /// the map.
+  double max_translation_per_frame_m = 0.0;
   double max_rotation_per_frame_deg = 180.0;
   /// Derive d_max from the observed deviations (true), or keep the registration settings' own
   /// max_correspondence_distance (false; the CLI and Python set it when --max-distance is given).
@@ -254,7 +258,8 @@ class Odometry {
   /// Why a registration cannot be the frame's pose ("" = accepted): not converged, a motion
   /// beyond the bounds per frame since the last registered frame, or an overlap below half the
   /// recent frames'.
-  [[nodiscard]] std::string judge(const RegistrationResult& r, double overlap) const;
+  [[nodiscard]] std::string judge(const RegistrationResult& r, double overlap,
+                                  double range_m) const;
   /// One registration of the frame from `start`, judged ("" = accepted).
   struct Attempt {
     RegistrationResult result;
@@ -262,8 +267,12 @@ class Odometry {
     std::string why;
   };
   [[nodiscard]] Attempt attempt(const PointCloud& source, const ReferenceIndex& index,
-                                double sigma_m, const Eigen::Matrix4d& T_guess,
+                                double sigma_m, double range_m, const Eigen::Matrix4d& T_guess,
                                 FrameStart start) const;
+  /// The frame's pose is the registration `a` from `start` (its report filled in); `rejected`
+  /// says why the starts before it were not taken.
+  void accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d& T_prediction,
+              double range_m, const std::string& rejected, FrameReport& report);
   /// Why the global registration does not confirm a wide-basin one ("" = confirmed).
   [[nodiscard]] std::string unconfirmed(const Attempt& wide, const Attempt& global) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
