@@ -16,7 +16,8 @@ A sequence folder is one of:
   frames 0-10, PROVENANCE.md), else poses_*.txt moved into the scanner frame with calib.txt's Tr.
 
 `--steps 1,2,3` runs every frame, every second and every third (30/15/10 Hz for a Kinect,
-2/1/0.67 Hz for the hand-held LiDAR). A frame is lost when its relative pose error against the
+2/1/0.67 Hz for the hand-held LiDAR). `--reverse` plays the frames backwards (the reference
+too): sequences with motions no default was measured on. A frame is lost when its relative pose error against the
 reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: sgd-icp reads with
 sgd_icp.read_points / read_depth_image; KISS-ICP reads the .bin with NumPy and decodes the depth
 PNG with Pillow and back-projects it in NumPy (its own loaders do the same).
@@ -97,7 +98,7 @@ def kitti_reference(folder: Path, frames: int) -> np.ndarray:
     return np.linalg.inv(Tr) @ np.linalg.inv(P[0]) @ P @ Tr
 
 
-def open_sequence(folder: Path, step: int, max_frames: int) -> Sequence:
+def open_sequence(folder: Path, step: int, max_frames: int, reverse: bool = False) -> Sequence:
     depth = sorted(folder.glob("frame-*.depth.png"))
     if depth:
         files = depth[::step]
@@ -111,9 +112,12 @@ def open_sequence(folder: Path, step: int, max_frames: int) -> Sequence:
         every = sorted((folder / "velodyne").glob("*.bin"))
         P = kitti_reference(folder, len(every))[::step]
         files, kinect, K = every[::step], False, None
+    if reverse:  # the same frames played backwards: a sequence no default was tuned on
+        files, P = files[::-1], P[::-1]
     if max_frames:
         files, P = files[:max_frames], P[:max_frames]
-    return Sequence(f"{folder.name} every {step}", files, np.linalg.inv(P[0]) @ P, kinect, K)
+    name = f"{folder.name} every {step}" + (" reversed" if reverse else "")
+    return Sequence(name, files, np.linalg.inv(P[0]) @ P, kinect, K)
 
 
 def angle_deg(R: np.ndarray) -> float:
@@ -249,6 +253,9 @@ def main() -> None:
     parser.add_argument("--steps", default="1", help="frame steps, comma-separated [default: 1]")
     parser.add_argument("--max-frames", type=int, default=0, help="frames per run [default: 0 = all]")
     parser.add_argument("--no-kiss", action="store_true", help="sgd-icp only")
+    parser.add_argument("--reverse", action="store_true",
+                        help="play each sequence backwards (last frame first): motions and turns "
+                        "the defaults were not measured on")
     parser.add_argument("--threads", type=int, default=1,
                         help="sgd-icp's num_threads and KISS-ICP's max_num_threads [default: 1]")
     parser.add_argument("--kiss-our-voxel", action="store_true",
@@ -261,7 +268,7 @@ def main() -> None:
     rows = []
     for folder in args.folders:
         for step in (int(s) for s in args.steps.split(",")):
-            seq = open_sequence(folder, step, args.max_frames)
+            seq = open_sequence(folder, step, args.max_frames, args.reverse)
             sides: dict[str, tuple[dict[str, Any], list[float], str]] = {}
 
             def record(name: str, poses: np.ndarray, wall: float, notes: str) -> None:
