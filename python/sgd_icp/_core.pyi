@@ -1810,11 +1810,11 @@ class Odometry:
         """method: the registration step, a --method of the CLI (sgd, sgd-point, sgd-plane,
         sgd-gicp, icp, icp-plane or gicp). Keywords: the odometry settings of `sgdicp odometry`
         (max_range (100 m), min_range (0 m), voxel_size (0 m), max_points_per_voxel (20),
-        initial_threshold (0 m), min_motion (0 m), max_translation_per_frame (5 m),
-        max_rotation_per_frame (180 deg); 0 = derived from the first frame, docs/odometry.md) and
-        the keywords of register() for the method. max_distance= fixes d_max and turns the
-        adaptive threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for
-        an invalid value.
+        initial_threshold (0 m), min_motion (0 m), max_translation_per_frame (0 m),
+        max_rotation_per_frame (180 deg); 0 = derived from the data, docs/odometry.md) and the
+        keywords of register() for the method. max_distance= fixes d_max and turns the adaptive
+        threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for an
+        invalid value.
         """
     def register_frame(self, points: _Points) -> npt.NDArray[np.float64]:
         """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),

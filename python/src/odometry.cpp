@@ -135,7 +135,7 @@ void bind_odometry(py::module_& m) {
            "method"_a = "sgd",
            ("method: the registration step, a --method of the CLI (" + method_list() +
             "). Keywords: the odometry settings of `sgdicp odometry` (" + keywords +
-            "; 0 = derived from the first frame, docs/odometry.md) and the keywords of "
+            "; 0 = derived from the data, docs/odometry.md) and the keywords of "
             "register() for the method. max_distance= fixes d_max and turns the adaptive "
             "threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for an "
             "invalid value.")
