@@ -526,6 +526,14 @@ TEST(SmallSource, TakesGaussNewtonStepsWithTheDefaultOptimizer) {
   SgdSettings off;
   off.small_source_gauss_newton = false;
   EXPECT_EQ(optimizer_for(off, 361), off.optimizer);
+  // Adam's own constants chosen: Adam; the Gauss-Newton steps' damping chosen: those steps.
+  SgdSettings adam_tuned;
+  adam_tuned.optimizer.beta1 = 0.8;
+  EXPECT_EQ(optimizer_for(adam_tuned, 361), adam_tuned.optimizer);
+  SgdSettings damped;
+  damped.optimizer.damping = 0.01;
+  EXPECT_EQ(optimizer_for(damped, 361).type, OptimizerType::gauss_newton);
+  EXPECT_EQ(optimizer_for(damped, 361).damping, 0.01);
 }
 
 // The real bunny (361 source points), its 34 deg start turned a further 25 deg about three

@@ -294,9 +294,7 @@ RegistrationResult Odometry::align_to_map(const PointCloud& source, const Refere
     SgdSettings s = sgd_;
     if (settings_.adaptive_threshold)
       s.pairing.max_correspondence_distance = Distance::metres(3 * sigma_m);
-    const OptimizerSettings default_rule = SgdSettings{}.optimizer;
-    if (settings_.tracking_gauss_newton && s.optimizer.type == default_rule.type &&
-        s.optimizer.learning_rate == default_rule.learning_rate) {
+    if (settings_.tracking_gauss_newton && is_default_step_rule(s.optimizer)) {
       s.optimizer = with_gauss_newton_steps(s.optimizer);
     }
     if (settings_.step_within_threshold) cap_step(s, index);

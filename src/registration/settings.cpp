@@ -54,8 +54,16 @@ std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_point
   return std::min(settings.sampling.batch_size, std::max(kMinCappedBatch, twice_per_window));
 }
 
+bool is_default_step_rule(const OptimizerSettings& optimizer) {
+  OptimizerSettings rule = optimizer;
+  const OptimizerSettings defaults = SgdSettings{}.optimizer;
+  rule.hessian_decay = defaults.hessian_decay;
+  rule.damping = defaults.damping;
+  return rule == defaults;
+}
+
 OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_points) {
-  if (!settings.small_source_gauss_newton || settings.optimizer != SgdSettings{}.optimizer ||
+  if (!settings.small_source_gauss_newton || !is_default_step_rule(settings.optimizer) ||
       !is_small_source(settings, source_points)) {
     return settings.optimizer;
   }

@@ -189,9 +189,14 @@ inline constexpr std::size_t kMinCappedBatch = 32;
 /// Whether a source of `source_points` points is small: fewer than batch_size x window / 2, so
 /// that m covers it about twice per convergence window.
 [[nodiscard]] bool is_small_source(const SgdSettings& settings, std::size_t source_points);
+/// Whether `optimizer` is the step rule nobody chose: the default's type at its own learning
+/// rate with its own constants. Its damping and its Hessian's decay may differ: they shape the
+/// Gauss-Newton steps that then replace it (a small source's coarse stage, optimizer_for; the
+/// odometry's tracking).
+[[nodiscard]] bool is_default_step_rule(const OptimizerSettings& optimizer);
 /// The coarse stage's step rule on a source of `source_points` points: Gauss-Newton at its own
 /// step for a small source when small_source_gauss_newton says so and `optimizer` is the
-/// default, else `optimizer`.
+/// default step rule (is_default_step_rule), else `optimizer`.
 [[nodiscard]] OptimizerSettings optimizer_for(const SgdSettings& settings,
                                               std::size_t source_points);
 /// The fewest source points a run with these settings accepts: batch_size, or with the cap the
