@@ -12,8 +12,10 @@
 // A registration is judged before its pose is taken (converged, within the bounds per frame,
 // an overlap with the map like the frames before); one that fails is retried from the last
 // good pose, with SGD-ICP's wide basin (confirmed by the global registration) and with no guess
-// (the global registration). A frame no start registers is lost: it gets the
-// predicted pose and touches neither the map nor the motion model. docs/odometry.md.
+// (the global registration), and one whose overlap is doubtful (below 0.8 of the recent
+// frames') is compared with theirs: the highest overlap is the pose. A frame no start registers
+// is lost: it gets the predicted pose and touches neither the map nor the motion model.
+// docs/odometry.md.
 #include <array>
 #include <cstddef>
 #include <optional>
@@ -251,8 +253,9 @@ class Odometry {
                                                 const ReferenceIndex& index, double sigma_m,
                                                 const Eigen::Matrix4d& T_guess,
                                                 FrameStart start) const;
-  /// Registers the frame from each start in turn until one is accepted (judge), filling the
-  /// report; lost when none is.
+  /// Registers the frame from each start in turn until one is accepted (judge) with an overlap
+  /// that is not doubtful, filling the report; else the doubtful one with the highest overlap;
+  /// lost when none is accepted.
   void register_to_map(const PointCloud& source, const ReferenceIndex& index, double range_m,
                        FrameReport& report);
   /// Why a registration cannot be the frame's pose ("" = accepted): not converged, a motion
