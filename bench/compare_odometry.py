@@ -17,8 +17,8 @@ A sequence folder is one of:
 
 `--steps 1,2,3` runs every frame, every second and every third (30/15/10 Hz for a Kinect,
 2/1/0.67 Hz for the hand-held LiDAR). `--reverse` plays the frames backwards (the reference
-too): sequences with motions no default was measured on. A frame is lost when its relative pose error against the
-reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: sgd-icp reads with
+too): sequences with motions no default was measured on. A frame is lost when its relative pose
+error against the reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: sgd-icp reads with
 sgd_icp.read_points / read_depth_image; KISS-ICP reads the .bin with NumPy and decodes the depth
 PNG with Pillow and back-projects it in NumPy (its own loaders do the same).
 

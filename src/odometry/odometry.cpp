@@ -390,6 +390,9 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
   // An accepted registration whose overlap is doubtful, and its start: the pose unless a later
   // start overlaps more.
   std::optional<std::pair<Attempt, FrameStart>> doubtful;
+  const auto reject = [&rejected](FrameStart start, const std::string& why) {
+    rejected += (rejected.empty() ? "" : "; ") + std::string(enum_name(start)) + ": " + why;
+  };
   for (const FrameStart start : {FrameStart::prediction, FrameStart::last_pose,
                                  FrameStart::wide_basin, FrameStart::global}) {
     const Eigen::Matrix4d T_guess = start == FrameStart::prediction ? T_prediction : T_last_good_;
@@ -407,9 +410,8 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
       a.why = unconfirmed(a, *global);
     }
     if (a.why.empty() && !overlaps_.empty() && a.overlap < kOverlapDoubt * median_of(overlaps_)) {
-      rejected += (rejected.empty() ? "" : "; ") + std::string(enum_name(start)) +
-                  ": overlap with the map " + format_number(a.overlap) + ", doubtful (below " +
-                  format_number(kOverlapDoubt) + " of the last frames')";
+      reject(start, "overlap with the map " + format_number(a.overlap) + ", doubtful (below " +
+                        format_number(kOverlapDoubt) + " of the last frames')");
       if (!doubtful || a.overlap > doubtful->first.overlap) doubtful.emplace(std::move(a), start);
       continue;
     }
@@ -417,7 +419,7 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
       accept(a, start, T_prediction, range_m, rejected, report);
       return;
     }
-    rejected += (rejected.empty() ? "" : "; ") + std::string(enum_name(start)) + ": " + a.why;
+    reject(start, a.why);
   }
   if (doubtful) {
     accept(doubtful->first, doubtful->second, T_prediction, range_m, rejected, report);
