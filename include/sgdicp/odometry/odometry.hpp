@@ -13,8 +13,9 @@
 // an overlap with the map like the frames before); one that fails is retried from the last
 // good pose, with SGD-ICP's wide basin (confirmed by the global registration) and with no guess
 // (the global registration), and one whose overlap is doubtful (below 0.8 of the recent
-// frames') is compared with theirs: the highest overlap is the pose. A frame no start registers
-// is lost: it gets the predicted pose and touches neither the map nor the motion model.
+// frames', or half the frame before any is known) is compared with theirs: the highest overlap
+// is the pose. A frame no start registers is lost: it gets the predicted pose and touches
+// neither the map nor the motion model.
 // docs/odometry.md.
 #include <array>
 #include <cstddef>
@@ -263,6 +264,9 @@ class Odometry {
   /// recent frames'.
   [[nodiscard]] std::string judge(const RegistrationResult& r, double overlap,
                                   double range_m) const;
+  /// The overlap below which an accepted registration is doubtful: 0.8 of the recent frames'
+  /// median, or half the frame before any is known.
+  [[nodiscard]] double doubtful_below() const;
   /// One registration of the frame from `start`, judged ("" = accepted).
   struct Attempt {
     RegistrationResult result;
