@@ -376,7 +376,11 @@ double Odometry::doubtful_below() const {
 }
 
 // Whether the global registration's answer confirms the wide basin's: the same pose within a
-// few degrees and two map voxels ("" = confirmed).
+// few degrees and two map voxels ("" = confirmed). A global answer that is itself doubtful and
+// overlaps the map less than the wide basin's disproves nothing: the wide basin's then stands on
+// its own overlap (judged as any start's). The hand-held LiDAR played backwards every 7th-8th
+// scan: in a corridor the global answer slid 2.3 m along it with 0.57 of the frame on the map, and
+// the right wide-basin pose was thrown out for it.
 std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) const {
   // The global start's own reason follows in the frame's message ("global: ..."): not twice.
   if (!global.why.empty()) return "not confirmed by the global registration";
@@ -385,6 +389,7 @@ std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) co
   const double turn_deg = rotation_error_geodesic(T_wide, T_global) * 180.0 / std::numbers::pi;
   const double shift_m = translation_error(T_wide, T_global);
   if (turn_deg <= kConfirmDeg && shift_m <= kConfirmVoxels * voxel_size_m_) return "";
+  if (global.overlap < doubtful_below() && global.overlap < wide.overlap) return "";
   return "the global registration ends " + format_number(turn_deg) + " deg and " +
          format_number(shift_m) + " m from it";
 }
