@@ -17,7 +17,8 @@ A sequence folder is one of:
 
 `--steps 1,2,3` runs every frame, every second and every third (30/15/10 Hz for a Kinect,
 2/1/0.67 Hz for the hand-held LiDAR). `--reverse` plays the frames backwards (the reference
-too): sequences with motions no default was measured on. A frame is lost when its relative pose
+too): sequences with motions no default was measured on. `--steps 5 --irregular 1,2,3` reads,
+for each seed, every next frame 1 to 5 frames on at random (a logger dropping frames). A frame is lost when its relative pose
 error against the reference exceeds 20 cm or 2 deg. Both sides are timed as their users run them: sgd-icp reads with
 sgd_icp.read_points / read_depth_image; KISS-ICP reads the .bin with NumPy and decodes the depth
 PNG with Pillow and back-projects it in NumPy (its own loaders do the same).
@@ -98,25 +99,41 @@ def kitti_reference(folder: Path, frames: int) -> np.ndarray:
     return np.linalg.inv(Tr) @ np.linalg.inv(P[0]) @ P @ Tr
 
 
-def open_sequence(folder: Path, step: int, max_frames: int, reverse: bool = False) -> Sequence:
+def frame_indices(count: int, step: int, irregular_seed: int | None) -> list[int]:
+    """Every step-th of `count` frames; with a seed, each next frame 1 to `step` frames on, drawn
+    at random: a logger that drops frames, a rate that is not steady."""
+    if irregular_seed is None:
+        return list(range(0, count, step))
+    rng = np.random.default_rng(irregular_seed)
+    indices = [0]
+    while (k := indices[-1] + int(rng.integers(1, step + 1))) < count:
+        indices.append(k)
+    return indices
+
+
+def open_sequence(folder: Path, step: int, max_frames: int, reverse: bool = False,
+                  irregular_seed: int | None = None) -> Sequence:
     depth = sorted(folder.glob("frame-*.depth.png"))
     if depth:
-        files = depth[::step]
-        P = np.array([orthonormal(np.loadtxt(str(f).replace(".depth.png", ".pose.txt"))) for f in files])
+        every = depth
         kinect, K = True, folder / "camera-intrinsics.txt"
-    elif (folder / "scans").is_dir():
-        every = sorted((folder / "scans").glob("*.bin"))
-        P = homogeneous(np.loadtxt(folder / "poses.txt"))[: len(every)][::step]
-        files, kinect, K = every[::step], False, None
     else:
-        every = sorted((folder / "velodyne").glob("*.bin"))
-        P = kitti_reference(folder, len(every))[::step]
-        files, kinect, K = every[::step], False, None
+        every = sorted((folder / "scans").glob("*.bin")) or sorted((folder / "velodyne").glob("*.bin"))
+        kinect, K = False, None
+    pick = frame_indices(len(every), step, irregular_seed)
+    files = [every[i] for i in pick]
+    if depth:
+        P = np.array([orthonormal(np.loadtxt(str(f).replace(".depth.png", ".pose.txt"))) for f in files])
+    elif (folder / "scans").is_dir():
+        P = homogeneous(np.loadtxt(folder / "poses.txt"))[: len(every)][pick]
+    else:
+        P = kitti_reference(folder, len(every))[pick]
     if reverse:  # the same frames played backwards: a sequence no default was tuned on
         files, P = files[::-1], P[::-1]
     if max_frames:
         files, P = files[:max_frames], P[:max_frames]
-    name = f"{folder.name} every {step}" + (" reversed" if reverse else "")
+    rate = f"every {step}" if irregular_seed is None else f"every 1-{step} (seed {irregular_seed})"
+    name = f"{folder.name} {rate}" + (" reversed" if reverse else "")
     return Sequence(name, files, np.linalg.inv(P[0]) @ P, kinect, K)
 
 
@@ -256,6 +273,10 @@ def main() -> None:
     parser.add_argument("--reverse", action="store_true",
                         help="play each sequence backwards (last frame first): motions and turns "
                         "the defaults were not measured on")
+    parser.add_argument("--irregular", default="",
+                        help="comma-separated seeds: for each, every next frame is 1 to --steps "
+                        "frames on, drawn at random (dropped frames, an unsteady rate) "
+                        "[default: none, every step-th frame]")
     parser.add_argument("--threads", type=int, default=1,
                         help="sgd-icp's num_threads and KISS-ICP's max_num_threads [default: 1]")
     parser.add_argument("--kiss-our-voxel", action="store_true",
@@ -267,8 +288,9 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     for folder in args.folders:
-        for step in (int(s) for s in args.steps.split(",")):
-            seq = open_sequence(folder, step, args.max_frames, args.reverse)
+        seeds = [int(s) for s in args.irregular.split(",")] if args.irregular else [None]
+        for step, seed in ((int(s), seed) for s in args.steps.split(",") for seed in seeds):
+            seq = open_sequence(folder, step, args.max_frames, args.reverse, seed)
             sides: dict[str, tuple[dict[str, Any], list[float], str]] = {}
 
             def record(name: str, poses: np.ndarray, wall: float, notes: str) -> None:
