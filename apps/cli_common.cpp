@@ -19,19 +19,20 @@ constexpr std::pair<std::string_view, std::string_view> kDepthOptionOf[] = {
     {"depth_units_per_m", "--depth-scale"},
     {"max_depth_m", "--max-depth"},
     {"min_depth_m", "--min-depth"},
-    {"pixel_stride", "--pixel-stride"}};
+    {"pixel_stride", "--pixel-stride"},
+    {"border_px", "--depth-border"}};
 
-void validate_depth_settings(const DepthImageSettings& settings) {
-  try {
-    settings.validate();
-  } catch (const InvalidSettingsError& e) {
-    std::string what = e.what();
-    for (const auto& [field, option] : kDepthOptionOf) {
-      if (what.starts_with(field)) what = std::string(option) + what.substr(field.size());
-    }
-    throw InvalidSettingsError(what);
+}  // namespace
+
+void throw_naming_depth_option(const InvalidSettingsError& e) {
+  std::string what = e.what();
+  for (const auto& [field, option] : kDepthOptionOf) {
+    if (what.starts_with(field)) what = std::string(option) + what.substr(field.size());
   }
+  throw InvalidSettingsError(what);
 }
+
+namespace {
 
 // --intrinsics as a file or four numbers; without it, camera-intrinsics.txt beside the image
 // (the 7-Scenes layout), said on stderr.
@@ -59,10 +60,12 @@ PinholeIntrinsics intrinsics_for(const std::string& image, const DepthOptions& o
 }
 
 PointCloud load_depth_image(const std::string& path, bool verbose, const DepthOptions& o) {
-  validate_depth_settings(o.settings);
+  naming_depth_options([&] { o.settings.validate(); });
   const PinholeIntrinsics K = intrinsics_for(path, o, verbose);
   DepthImageReport report;
-  PointCloud cloud = read_depth_image(path, K, o.settings, &report);
+  // An image too small for the border is found when read: named by its option too.
+  PointCloud cloud =
+      naming_depth_options([&] { return read_depth_image(path, K, o.settings, &report); });
   if (verbose) {
     std::cerr << "note: " << path << ": depth image " << report.width << " x " << report.height
               << ", " << report.valid << " of " << report.pixels << " pixels back-projected ("
@@ -93,6 +96,10 @@ void add_depth_options(CLI::App& app, DepthOptions& o) {
   app.add_option("--pixel-stride", o.settings.pixel_stride,
                  "Back-project every n-th pixel of depth images in x and y, pixels [default: " +
                      std::to_string(d.pixel_stride) + "]");
+  app.add_option("--depth-border", o.settings.border_px,
+                 "Drop a band this wide along each edge of depth images (a Kinect v1's depth is "
+                 "off by up to ~1 cm toward its left and right edges), pixels [default: " +
+                     std::to_string(d.border_px) + "]");
 }
 
 bool is_depth_image(const std::string& path) {

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "sgdicp/core/error.hpp"
 #include "sgdicp/io/depth_image.hpp"
 #include "sgdicp/io/io.hpp"
 #include "sgdicp/registration/registration.hpp"
@@ -28,11 +29,25 @@ class ExitStatus : public std::runtime_error {
 inline constexpr int kExitNoGlobalSolution = 3;
 
 /// How a depth image (a .png path) becomes a cloud: --intrinsics, --depth-scale, --max-depth,
-/// --min-depth, --pixel-stride (docs/depth.md).
+/// --min-depth, --pixel-stride, --depth-border (docs/depth.md).
 struct DepthOptions {
   std::string intrinsics;  ///< a 3x3 K file or "fx,fy,cx,cy"; empty: camera-intrinsics.txt beside
   DepthImageSettings settings;
 };
+
+/// Throws `e` again with the CLI option instead of the DepthImageSettings field it names.
+[[noreturn]] void throw_naming_depth_option(const InvalidSettingsError& e);
+
+/// Runs `f`; a bad depth setting it throws (validate(), or a border too wide for the image read)
+/// names its CLI option.
+template <typename F>
+auto naming_depth_options(F&& f) {
+  try {
+    return f();
+  } catch (const InvalidSettingsError& e) {
+    throw_naming_depth_option(e);
+  }
+}
 
 /// The depth-image options, with units and the library's defaults in their help.
 void add_depth_options(CLI::App& app, DepthOptions& o);

@@ -197,7 +197,7 @@ AbsoluteTrajectoryError print_evaluation(const std::vector<Eigen::Matrix4d>& est
 // Registers frame `i`, or records it as skipped when it cannot be read; returns whether it could.
 bool register_or_skip(Odometry& odometry, const FrameSource& source, std::size_t i) {
   try {
-    odometry.register_frame(source.read(i));
+    odometry.register_frame(naming_depth_options([&] { return source.read(i); }));
     return true;
   } catch (const IoError& e) {
     odometry.skip_frame(std::string("unreadable: ") + e.what());

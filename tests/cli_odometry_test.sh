@@ -128,6 +128,11 @@ if [ -f "$SEVEN/camera-intrinsics.txt" ]; then
   else
     fail "odometry on 7-Scenes (exit $rc): $(head -c 400 "$tmp/err")"
   fi
+  expect_error "odometry with a depth border wider than half the frame" \
+    '--depth-border = 300 leaves no pixel of a 640 x 480' \
+    odometry "$SEVEN" --max-frames 3 --depth-border 300 --poses-out "$tmp/b.txt"
+  [ ! -e "$tmp/b.txt" ] && pass "nothing written after a settings error" ||
+    fail "odometry wrote $tmp/b.txt after a settings error"
   # The same 10 frames in the TUM RGB-D layout (depth.txt with timestamps 4 ms after the 30 Hz
   # ones above, depth/ PNGs in millimetres), with the 7-Scenes run's own TUM trajectory as the
   # ground truth: associated by timestamp, every frame matches its own pose (errors ~0), where

@@ -249,6 +249,16 @@ PY
   else
     fail "--pixel-stride / --max-depth (exit $rc): $(head -c 400 "$tmp/err")"
   fi
+  run register "$tmp/plane.png" "$tmp/plane.png" --intrinsics 70,70,39.5,29.5 --depth-border 2 \
+    --method icp
+  # a band of 2 pixels along each edge of 80 x 60: 76 x 56 pixels left
+  if [ "$rc" -eq 0 ] && grep -q '4256 of 4256 pixels back-projected' "$tmp/err"; then
+    pass "--depth-border drops a band along each edge of the depth image"
+  else
+    fail "--depth-border (exit $rc): $(head -c 400 "$tmp/err")"
+  fi
+  expect_error "--depth-border as wide as half the image" '--depth-border = 30 leaves no pixel' \
+    register "$tmp/plane.png" "$tmp/plane.png" --intrinsics 70,70,39.5,29.5 --depth-border 30
   expect_error "a depth image without intrinsics" 'needs --intrinsics' \
     register "$tmp/plane.png" "$tmp/plane.png"
   expect_error "an 8-bit PNG as a depth image" 'eight.png: an 8-bit PNG' \

@@ -176,6 +176,36 @@ TEST(DepthImage, StrideTakesEveryNthPixelFromTheTopLeft) {
   EXPECT_EQ(cloud.points[4].x(), static_cast<float>((3 - 3.5) * 1.024 / 500.0));
 }
 
+TEST(DepthImage, BorderDropsABandAlongEachEdgeBeforeTheStride) {
+  const int w = 9, h = 7;
+  std::vector<std::uint16_t> depth(w * h);
+  for (int i = 0; i < w * h; ++i)
+    depth[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(1000 + i);
+  DepthImageSettings settings;
+  settings.border_px = 2;
+  DepthImageReport report;
+  PointCloud cloud = depth_image_to_cloud(depth.data(), w, h, kK, settings, &report);
+  EXPECT_EQ(report.pixels, 5U * 3U);  // columns 2-6, rows 2-4
+  ASSERT_EQ(cloud.size(), 15U);
+  EXPECT_EQ(cloud.points.front().z(), static_cast<float>((1000 + 2 * w + 2) / 1000.0));
+  EXPECT_EQ(cloud.points.back().z(), static_cast<float>((1000 + 4 * w + 6) / 1000.0));
+  // With a stride, the multiples of it within the border: columns 3 and 6, row 3.
+  settings.pixel_stride = 3;
+  cloud = depth_image_to_cloud(depth.data(), w, h, kK, settings, &report);
+  EXPECT_EQ(report.pixels, 2U);
+  ASSERT_EQ(cloud.size(), 2U);
+  EXPECT_EQ(cloud.points[0].z(), static_cast<float>((1000 + 3 * w + 3) / 1000.0));
+  EXPECT_EQ(cloud.points[1].z(), static_cast<float>((1000 + 3 * w + 6) / 1000.0));
+  // Two borders as wide as the image's height leave nothing: refused, not an empty cloud.
+  settings = {};
+  settings.border_px = 4;
+  const std::string why =
+      error_of([&] { (void)depth_image_to_cloud(depth.data(), w, h, kK, settings, nullptr); });
+  EXPECT_NE(why.find("border_px = 4 leaves no pixel of a 9 x 7"), std::string::npos) << why;
+  settings.border_px = 3;  // columns 3-5 of row 3 left
+  EXPECT_EQ(depth_image_to_cloud(depth.data(), w, h, kK, settings, nullptr).size(), 3U);
+}
+
 TEST(DepthImage, InvalidPixelsAreDroppedAndCounted) {
   // 0 (no reading), 65535 (65.5 m: beyond max_depth_m), 300 mm (below min_depth_m 0.5 m).
   const std::vector<std::uint16_t> depth{0, 1000, 65535, 300, 0, 2500};
@@ -220,6 +250,9 @@ TEST(DepthImage, BadSettingsAndIntrinsicsAreTypedErrors) {
   DepthImageSettings s;
   s.pixel_stride = 0;
   EXPECT_NE(run(kK, s).find("pixel_stride"), std::string::npos);
+  s = {};
+  s.border_px = -1;
+  EXPECT_NE(run(kK, s).find("border_px"), std::string::npos);
   s = {};
   s.max_depth_m = std::nan("");
   EXPECT_NE(run(kK, s).find("max_depth_m"), std::string::npos);

@@ -1630,15 +1630,17 @@ def read_depth_image(
     max_depth: float = 10.0,
     min_depth: float = 0.0,
     pixel_stride: int = 1,
+    border: int = 0,
 ) -> npt.NDArray[np.float32]:
     """Reads a 16-bit greyscale PNG depth image and back-projects its valid pixels into an (N, 3)
     float32 array, metres, in the camera frame (x right, y down, z forward), row by row
     (docs/depth.md). intrinsics: (fx, fy, cx, cy) in pixels, a 3x3 camera matrix, or the path of
     a 3x3 K file (the 7-Scenes camera-intrinsics.txt). depth_scale: stored units per metre, 0 =
     1000 (millimetres; TUM RGB-D: 5000). Pixels of depth 0, or outside [min_depth, max_depth]
-    metres, are dropped; pixel_stride takes every n-th pixel in x and y. Raises IoError
-    (OSError), FormatError (not a 16-bit greyscale PNG, truncated, too many pixels) or
-    InvalidSettingsError (ValueError).
+    metres, are dropped; pixel_stride takes every n-th pixel in x and y; border drops a band of
+    that many pixels along each edge (a Kinect v1's depth is off by up to ~1 cm toward its left
+    and right edges). Raises IoError (OSError), FormatError (not a 16-bit greyscale PNG,
+    truncated, too many pixels) or InvalidSettingsError (ValueError).
     """
 
 
@@ -1649,6 +1651,7 @@ def depth_to_points(
     max_depth: float = 10.0,
     min_depth: float = 0.0,
     pixel_stride: int = 1,
+    border: int = 0,
 ) -> npt.NDArray[np.float32]:
     """Back-projects a depth image held in memory, as read_depth_image: a 2-D array (rows, columns)
     of uint16 stored units (depth_scale per metre) or of float32/float64 metres (depth_scale

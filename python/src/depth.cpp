@@ -51,13 +51,16 @@ PinholeIntrinsics intrinsics_from_object(const py::handle& value) {
 }
 
 DepthImageSettings depth_settings(const py::handle& depth_scale, const py::handle& max_depth,
-                                  const py::handle& min_depth, const py::handle& pixel_stride) {
+                                  const py::handle& min_depth, const py::handle& pixel_stride,
+                                  const py::handle& border) {
   DepthImageSettings s;
   s.depth_units_per_m = as_real(depth_scale, "depth_scale");
   s.max_depth_m = as_real(max_depth, "max_depth");
   s.min_depth_m = as_real(min_depth, "min_depth");
   const std::uint64_t stride = as_count(pixel_stride, "pixel_stride");
   s.pixel_stride = stride > 1U << 30 ? 0 : static_cast<int>(stride);  // 0: validate() says why
+  const std::uint64_t band = as_count(border, "border");
+  s.border_px = band > 1U << 30 ? -1 : static_cast<int>(band);  // -1: validate() says why
   s.validate();
   return s;
 }
@@ -99,10 +102,10 @@ void bind_depth(py::module_& m) {
       "read_depth_image",
       [](const std::filesystem::path& path, const py::handle& intrinsics,
          const py::handle& depth_scale, const py::handle& max_depth, const py::handle& min_depth,
-         const py::handle& pixel_stride) {
+         const py::handle& pixel_stride, const py::handle& border) {
         const PinholeIntrinsics K = intrinsics_from_object(intrinsics);
         const DepthImageSettings s =
-            depth_settings(depth_scale, max_depth, min_depth, pixel_stride);
+            depth_settings(depth_scale, max_depth, min_depth, pixel_stride, border);
         PointCloud cloud = [&] {
           const py::gil_scoped_release release;
           return read_depth_image(path, K, s);
@@ -111,28 +114,31 @@ void bind_depth(py::module_& m) {
       },
       "path"_a, "intrinsics"_a, "depth_scale"_a = d.depth_units_per_m,
       "max_depth"_a = d.max_depth_m, "min_depth"_a = d.min_depth_m,
-      "pixel_stride"_a = d.pixel_stride,
+      "pixel_stride"_a = d.pixel_stride, "border"_a = d.border_px,
       "Reads a 16-bit greyscale PNG depth image and back-projects its valid pixels into an (N, 3) "
       "float32 array, metres, in the camera frame (x right, y down, z forward), row by row "
       "(docs/depth.md). intrinsics: (fx, fy, cx, cy) in pixels, a 3x3 camera matrix, or the path "
       "of a 3x3 K file (the 7-Scenes camera-intrinsics.txt). depth_scale: stored units per metre, "
       "0 = 1000 (millimetres; TUM RGB-D: 5000). Pixels of depth 0, or outside [min_depth, "
       "max_depth] metres, are "
-      "dropped; pixel_stride takes every n-th pixel in x and y. Raises IoError (OSError), "
+      "dropped; pixel_stride takes every n-th pixel in x and y; border drops a band of that many "
+      "pixels along each edge (a Kinect v1's depth is off by up to ~1 cm toward its left and "
+      "right edges). Raises IoError (OSError), "
       "FormatError (not a 16-bit greyscale PNG, truncated, too many pixels) or "
       "InvalidSettingsError (ValueError).");
   m.def(
       "depth_to_points",
       [](const py::handle& depth, const py::handle& intrinsics, const py::handle& depth_scale,
-         const py::handle& max_depth, const py::handle& min_depth, const py::handle& pixel_stride) {
+         const py::handle& max_depth, const py::handle& min_depth, const py::handle& pixel_stride,
+         const py::handle& border) {
         const PinholeIntrinsics K = intrinsics_from_object(intrinsics);
         const DepthImageSettings s =
-            depth_settings(depth_scale, max_depth, min_depth, pixel_stride);
+            depth_settings(depth_scale, max_depth, min_depth, pixel_stride, border);
         return array_from_cloud(cloud_from_depth_array(depth, K, s));
       },
       "depth"_a, "intrinsics"_a, "depth_scale"_a = d.depth_units_per_m,
       "max_depth"_a = d.max_depth_m, "min_depth"_a = d.min_depth_m,
-      "pixel_stride"_a = d.pixel_stride,
+      "pixel_stride"_a = d.pixel_stride, "border"_a = d.border_px,
       "Back-projects a depth image held in memory, as read_depth_image: a 2-D array (rows, "
       "columns) of uint16 stored units (depth_scale per metre) or of float32/float64 metres "
       "(depth_scale unused; NaN and infinite depths are dropped too). Returns (N, 3) float32, "

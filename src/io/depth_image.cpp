@@ -4,9 +4,11 @@
 // corrupt file, which is all this reader needs.
 #include "sgdicp/io/depth_image.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <limits>
 #include <memory>
@@ -118,13 +120,22 @@ PointCloud back_project(int width, int height, const PinholeIntrinsics& K,
   counts.height = height;
   DepthCheck check{settings.min_depth_m, settings.max_depth_m, counts};
   const int stride = settings.pixel_stride;
+  const int border = settings.border_px;
+  if (2 * static_cast<std::int64_t>(border) >= std::min(width, height)) {
+    bad_setting("border_px = " + std::to_string(border) + " leaves no pixel of a " +
+                std::to_string(width) + " x " + std::to_string(height) + " depth image");
+  }
+  // The pixels (u, v) with u and v multiples of the stride, within the border.
+  const int first = (border + stride - 1) / stride * stride;
+  const auto visited = [stride, border, first](int size) {
+    const int end = size - border;
+    return static_cast<std::size_t>(first < end ? (end - first + stride - 1) / stride : 0);
+  };
   PointCloud cloud;
-  const auto columns = static_cast<std::size_t>((width + stride - 1) / stride);
-  const auto rows = static_cast<std::size_t>((height + stride - 1) / stride);
-  counts.pixels = columns * rows;
+  counts.pixels = visited(width) * visited(height);
   cloud.points.reserve(counts.pixels);
-  for (int v = 0; v < height; v += stride) {
-    for (int u = 0; u < width; u += stride) {
+  for (int v = first; v < height - border; v += stride) {
+    for (int u = first; u < width - border; u += stride) {
       const double z = depth_m(static_cast<std::size_t>(v) * static_cast<std::size_t>(width) +
                                static_cast<std::size_t>(u));
       if (!check.accept(z)) continue;
@@ -275,6 +286,9 @@ void DepthImageSettings::validate() const {
   }
   if (pixel_stride < 1 || pixel_stride > kMaxPixelStride) {
     bad_setting("pixel_stride = " + std::to_string(pixel_stride) + " must be in [1, 65536]");
+  }
+  if (border_px < 0 || border_px > kMaxPixelStride) {
+    bad_setting("border_px = " + std::to_string(border_px) + " must be in [0, 65536] pixels");
   }
 }
 

@@ -61,6 +61,17 @@ def test_float_metres_stride_and_dropped_pixels():
     np.testing.assert_array_equal(sgd_icp.depth_to_points(depth.astype(np.float64), K, pixel_stride=2), points)
 
 
+def test_border_drops_a_band_along_each_edge():
+    depth = np.linspace(0.5, 3.0, 7 * 9, dtype=np.float32).reshape(7, 9)
+    points = sgd_icp.depth_to_points(depth, K, border=2)
+    inner = np.zeros_like(depth)
+    inner[2:-2, 2:-2] = depth[2:-2, 2:-2]
+    np.testing.assert_allclose(points, expected_points(inner.astype(np.float64), K), rtol=1e-6)
+    assert len(points) == 5 * 3
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="leaves no pixel of a 9 x 7"):
+        sgd_icp.depth_to_points(depth, K, border=4)
+
+
 def test_depth_scale_and_range_keywords():
     depth = np.array([[5000, 100, 60000]], dtype=np.uint16)
     points = sgd_icp.depth_to_points(depth, K, depth_scale=5000)
@@ -101,6 +112,8 @@ def test_bad_input_is_a_typed_error(tmp_path):
         sgd_icp.depth_to_points(depth, (500, 480, float("nan"), 2))
     with pytest.raises(sgd_icp.InvalidSettingsError, match="pixel_stride"):
         sgd_icp.depth_to_points(depth, K, pixel_stride=0)
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="border"):
+        sgd_icp.depth_to_points(depth, K, border=-1)
     with pytest.raises(sgd_icp.InvalidSettingsError, match="max_depth"):
         sgd_icp.depth_to_points(depth, K, max_depth=-1)
     with pytest.raises(sgd_icp.InvalidInputError, match="3x3"):

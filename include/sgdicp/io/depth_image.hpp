@@ -54,17 +54,23 @@ struct DepthImageSettings {
   double min_depth_m = 0.0;
   /// Take every n-th pixel in x and y (1 = all): thins the cloud n^2-fold before anything else.
   int pixel_stride = 1;
+  /// Pixels dropped along each edge of the image (a band this wide at the left, right, top and
+  /// bottom), before the stride. A Kinect v1's depth is off by up to ~1 cm toward its left and
+  /// right edges (docs/depth.md, *Distorted edges*); 0 keeps every pixel. An image narrower or
+  /// lower than two borders is refused when read (InvalidSettingsError).
+  int border_px = 0;
 
   /// Throws InvalidSettingsError naming the field unless depth_units_per_m is 0 or in (0, 1e9],
-  /// 0 <= min_depth_m < max_depth_m <= 1e6 (all finite) and pixel_stride in [1, 65536].
+  /// 0 <= min_depth_m < max_depth_m <= 1e6 (all finite), pixel_stride in [1, 65536] and
+  /// border_px in [0, 65536].
   void validate() const;
   bool operator==(const DepthImageSettings&) const = default;
 };
 
 /// What happened to the pixels: pixels = valid + invalid_zero + invalid_range + nonfinite,
-/// counting only the pixels the stride visits.
+/// counting only the pixels the stride visits within the border.
 struct DepthImageReport {
-  std::size_t pixels = 0;         ///< pixels visited (ceil(w / stride) * ceil(h / stride))
+  std::size_t pixels = 0;         ///< pixels visited: within the border, every stride-th
   std::size_t valid = 0;          ///< back-projected: the points of the cloud
   std::size_t invalid_zero = 0;   ///< depth 0: no reading
   std::size_t invalid_range = 0;  ///< depth outside [min_depth_m, max_depth_m] (or negative)
