@@ -158,52 +158,59 @@ TEST(DepthImage, TiltedPlaneInMetresStaysOnThePlane) {
   EXPECT_LT(worst, 1e-6);
 }
 
-TEST(DepthImage, StrideTakesEveryNthPixelFromTheTopLeft) {
-  const int w = 7, h = 5;
-  std::vector<std::uint16_t> depth(w * h);
+// A w x h image whose pixel i (row by row) is 1000 + i millimetres deep: each point tells its
+// pixel.
+std::vector<std::uint16_t> numbered_depth(int w, int h) {
+  std::vector<std::uint16_t> depth(static_cast<std::size_t>(w * h));
   for (int i = 0; i < w * h; ++i)
     depth[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(1000 + i);
+  return depth;
+}
+
+// Back-projects numbered_depth(w, h) with `settings`: the pixels visited and the points are
+// exactly the pixels `taken` (indices row by row), in that order.
+PointCloud expect_pixels_taken(int w, int h, const DepthImageSettings& settings,
+                               const std::vector<int>& taken) {
+  const std::vector<std::uint16_t> depth = numbered_depth(w, h);
+  DepthImageReport report;
+  PointCloud cloud = depth_image_to_cloud(depth.data(), w, h, kK, settings, &report);
+  EXPECT_EQ(report.pixels, taken.size());
+  EXPECT_EQ(cloud.size(), taken.size());
+  for (std::size_t k = 0; k < std::min(taken.size(), cloud.size()); ++k) {
+    EXPECT_EQ(cloud.points[k].z(), static_cast<float>((1000 + taken[k]) / 1000.0)) << k;
+  }
+  return cloud;
+}
+
+TEST(DepthImage, StrideTakesEveryNthPixelFromTheTopLeft) {
   DepthImageSettings settings;
   settings.pixel_stride = 3;
-  DepthImageReport report;
-  const PointCloud cloud = depth_image_to_cloud(depth.data(), w, h, kK, settings, &report);
-  EXPECT_EQ(report.pixels, 3U * 2U);  // columns 0 3 6, rows 0 3
+  // 7 x 5: columns 0 3 6, rows 0 3.
+  const PointCloud cloud = expect_pixels_taken(7, 5, settings, {0, 3, 6, 21, 24, 27});
   ASSERT_EQ(cloud.size(), 6U);
-  const std::array<int, 6> taken{0, 3, 6, 21, 24, 27};
-  for (std::size_t k = 0; k < taken.size(); ++k) {
-    EXPECT_EQ(cloud.points[k].z(), static_cast<float>((1000 + taken[k]) / 1000.0));
-  }
   EXPECT_EQ(cloud.points[4].x(), static_cast<float>((3 - 3.5) * 1.024 / 500.0));
 }
 
 TEST(DepthImage, BorderDropsABandAlongEachEdgeBeforeTheStride) {
   const int w = 9, h = 7;
-  std::vector<std::uint16_t> depth(w * h);
-  for (int i = 0; i < w * h; ++i)
-    depth[static_cast<std::size_t>(i)] = static_cast<std::uint16_t>(1000 + i);
   DepthImageSettings settings;
   settings.border_px = 2;
-  DepthImageReport report;
-  PointCloud cloud = depth_image_to_cloud(depth.data(), w, h, kK, settings, &report);
-  EXPECT_EQ(report.pixels, 5U * 3U);  // columns 2-6, rows 2-4
-  ASSERT_EQ(cloud.size(), 15U);
-  EXPECT_EQ(cloud.points.front().z(), static_cast<float>((1000 + 2 * w + 2) / 1000.0));
-  EXPECT_EQ(cloud.points.back().z(), static_cast<float>((1000 + 4 * w + 6) / 1000.0));
-  // With a stride, the multiples of it within the border: columns 3 and 6, row 3.
+  std::vector<int> inside;  // columns 2-6 of rows 2-4
+  for (int v = 2; v <= 4; ++v)
+    for (int u = 2; u <= 6; ++u) inside.push_back(v * w + u);
+  (void)expect_pixels_taken(w, h, settings, inside);
+  // With a stride, the multiples of it within the border: columns 3 and 6 of row 3.
   settings.pixel_stride = 3;
-  cloud = depth_image_to_cloud(depth.data(), w, h, kK, settings, &report);
-  EXPECT_EQ(report.pixels, 2U);
-  ASSERT_EQ(cloud.size(), 2U);
-  EXPECT_EQ(cloud.points[0].z(), static_cast<float>((1000 + 3 * w + 3) / 1000.0));
-  EXPECT_EQ(cloud.points[1].z(), static_cast<float>((1000 + 3 * w + 6) / 1000.0));
+  (void)expect_pixels_taken(w, h, settings, {3 * w + 3, 3 * w + 6});
   // Two borders as wide as the image's height leave nothing: refused, not an empty cloud.
   settings = {};
   settings.border_px = 4;
+  const std::vector<std::uint16_t> depth = numbered_depth(w, h);
   const std::string why =
       error_of([&] { (void)depth_image_to_cloud(depth.data(), w, h, kK, settings, nullptr); });
   EXPECT_NE(why.find("border_px = 4 leaves no pixel of a 9 x 7"), std::string::npos) << why;
   settings.border_px = 3;  // columns 3-5 of row 3 left
-  EXPECT_EQ(depth_image_to_cloud(depth.data(), w, h, kK, settings, nullptr).size(), 3U);
+  (void)expect_pixels_taken(w, h, settings, {3 * w + 3, 3 * w + 4, 3 * w + 5});
 }
 
 TEST(DepthImage, InvalidPixelsAreDroppedAndCounted) {
