@@ -11,10 +11,10 @@
 //   - any method of methods.hpp (SGD-ICP by default) as the registration step.
 // A registration is judged before its pose is taken (converged, within the bounds per frame,
 // an overlap with the map like the frames before); one that fails is retried from the last
-// good pose, with SGD-ICP's wide basin (confirmed by the global registration) and with no guess
-// (the global registration), and one whose overlap is doubtful (below 0.8 of the recent
-// frames', or half the frame before any is known) is compared with theirs: the highest overlap
-// is the pose. A frame no start registers is lost: it gets the predicted pose and touches
+// good pose, with no guess (the global registration) and with SGD-ICP's wide basin (confirmed by
+// the global answer), and one whose overlap is doubtful (below 0.8 of the recent frames', or
+// half the frame before any is known) is compared with theirs: the highest overlap is the
+// pose. A frame no start registers is lost: it gets the predicted pose and touches
 // neither the map nor the motion model.
 // docs/odometry.md.
 #include <array>
@@ -156,13 +156,13 @@ class MotionModel {
   std::size_t pairs_ = 0;
 };
 
-/// What happened to one frame.
 /// Where a frame's registration started.
 enum class FrameStart {
   prediction,  ///< the motion model's prediction (MotionModel)
   last_pose,   ///< the last registered pose, without the velocity (a retry)
-  wide_basin,  ///< the last registered pose, with SGD-ICP's own wide basin (a retry)
-  global,      ///< no guess: the global registration against the map (the last retry)
+  wide_basin,  ///< the last registered pose, with SGD-ICP's own wide basin (the last retry)
+  global,      ///< no guess: the global registration against the map (a retry, before the wide
+               ///< basin, whose answer it confirms)
 };
 inline constexpr std::array<EnumName<FrameStart>, 4> kFrameStartNames{{
     {FrameStart::prediction, "prediction"},
@@ -177,6 +177,7 @@ constexpr std::string_view enum_noun(FrameStart) {
   return "frame start";
 }
 
+/// What happened to one frame.
 struct FrameReport {
   std::size_t index = 0;
   Eigen::Matrix4d T_first_frame = Eigen::Matrix4d::Identity();
