@@ -114,17 +114,14 @@ def frame_indices(count: int, step: int, irregular_seed: int | None) -> list[int
 def open_sequence(folder: Path, step: int, max_frames: int, reverse: bool = False,
                   irregular_seed: int | None = None) -> Sequence:
     depth = sorted(folder.glob("frame-*.depth.png"))
-    if depth:
-        every = depth
-        kinect, K = True, folder / "camera-intrinsics.txt"
-    else:
-        every = sorted((folder / "scans").glob("*.bin")) or sorted((folder / "velodyne").glob("*.bin"))
-        kinect, K = False, None
+    scans = (folder / "scans").is_dir()  # the hand-held LiDAR's layout, else KITTI's velodyne/
+    every = depth or sorted((folder / ("scans" if scans else "velodyne")).glob("*.bin"))
+    kinect, K = (True, folder / "camera-intrinsics.txt") if depth else (False, None)
     pick = frame_indices(len(every), step, irregular_seed)
     files = [every[i] for i in pick]
     if depth:
         P = np.array([orthonormal(np.loadtxt(str(f).replace(".depth.png", ".pose.txt"))) for f in files])
-    elif (folder / "scans").is_dir():
+    elif scans:
         P = homogeneous(np.loadtxt(folder / "poses.txt"))[: len(every)][pick]
     else:
         P = kitti_reference(folder, len(every))[pick]
