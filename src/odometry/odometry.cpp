@@ -44,6 +44,8 @@ Eigen::Matrix4d rigid_inverse(const Eigen::Matrix4d& T) {
 // *The map's frame at three quarters of a voxel*).
 constexpr double kMapThinning = 0.75;
 constexpr double kSourceThinning = 1.5;
+// The derived voxel is this share of the frames' range (their 99th-percentile point distance).
+constexpr double kVoxelShare = 0.01;
 
 // The 99th percentile of the point distances from the sensor (at most 20 000 points looked at).
 double range_percentile_m(const PointCloud& cloud) {
@@ -188,13 +190,19 @@ Odometry::Odometry(const OdometrySettings& settings, std::string_view method,
 }
 
 void Odometry::start(const PointCloud& cropped) {
-  voxel_size_m_ = settings_.voxel_size_m > 0.0 ? settings_.voxel_size_m
-                                               : std::max(0.01 * range_percentile_m(cropped), 1e-3);
+  const double range_m = range_percentile_m(cropped);
+  ranges_m_.assign(1, range_m);
+  voxel_size_m_ =
+      settings_.voxel_size_m > 0.0 ? settings_.voxel_size_m : std::max(kVoxelShare * range_m, 1e-3);
+  map_.emplace(voxel_size_m_, settings_.max_points_per_voxel);
+  start_threshold();
+}
+
+void Odometry::start_threshold() {
   const double initial =
       settings_.initial_threshold_m > 0.0 ? settings_.initial_threshold_m : 2.0 * voxel_size_m_;
   const double min_motion =
       settings_.min_motion_m > 0.0 ? settings_.min_motion_m : 0.1 * voxel_size_m_;
-  map_.emplace(voxel_size_m_, settings_.max_points_per_voxel);
   threshold_.emplace(initial, min_motion);
 }
 
@@ -243,6 +251,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     report.message = "no point within the range limits";
     return finish(report, PointCloud{}, started);
   }
+  const std::string grown = map_->empty() ? "" : grow_voxel(range_percentile_m(cropped));
   const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
@@ -260,6 +269,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   report.map_points = index.size();
 
   register_to_map(source, index, range_percentile_m(map_frame), report);
+  if (!grown.empty()) report.message += "; " + grown;
   return finish(report, map_frame, started);
 }
 
@@ -392,6 +402,38 @@ std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) co
   if (global.overlap < doubtful_below() && global.overlap < wide.overlap) return "";
   return "the global registration ends " + format_number(turn_deg) + " deg and " +
          format_number(shift_m) + " m from it";
+}
+
+namespace {
+constexpr std::size_t kRangeFrames = 5;  // registered frames whose range the voxel follows
+constexpr double kVoxelGrowth = 2.0;     // the voxel grows once theirs is this many times larger
+}  // namespace
+
+// A derived voxel follows the frames' range upwards: taken from a first frame facing a wall or in
+// a small room, it stays a share of a range the sensor soon exceeds. The hand-held LiDAR's first
+// scan cropped to 5 m left 5 cm voxels for a 20 m scene: 4x the time and the memory, and the
+// second scan, tracked with a threshold of 2 such voxels, 0.7 m off (docs/design.md, *A voxel
+// that grows with the frames' range*). Before a frame is registered, its range joins the last
+// frames'; the voxel grows when their median (the larger of two: a frame may see less than the
+// sensor can, never farther than the scene; later at least half of the last 5) asks for twice
+// the voxel or more. It never shrinks (a voxel too large costs precision, not time; shrinking
+// and growing back would rebuild the map at every doorway), nor changes when the user set it.
+// Returns what the frame's report says of it ("" when it did not grow).
+std::string Odometry::grow_voxel(double range_m) {
+  if (settings_.voxel_size_m > 0.0) return "";
+  ranges_m_.push_back(range_m);
+  if (ranges_m_.size() > kRangeFrames) ranges_m_.erase(ranges_m_.begin());
+  const double voxel_m = kVoxelShare * median_of(ranges_m_);
+  if (voxel_m < kVoxelGrowth * voxel_size_m_) return "";
+  const std::string note = "voxel " + format_number(voxel_size_m_) + " -> " +
+                           format_number(voxel_m) + " m (the frames' range grew)";
+  // The map's points, with their surfaces, into the coarser grid (its bound per voxel applies).
+  VoxelMap grown(voxel_m, settings_.max_points_per_voxel);
+  grown.add(map_->points());
+  map_ = std::move(grown);
+  voxel_size_m_ = voxel_m;
+  start_threshold();  // the derived threshold lengths are shares of the voxel
+  return note;
 }
 
 void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& index,

@@ -26,7 +26,8 @@ std::vector<Setting<S>> make_table() {
       setting<S, &S::voxel_size_m>(
           {"voxel-size", "voxel_size_m", kLength, "m",
            "Map voxel side (frames thinned to 0.75 of it for the map, 1.5 times it for the "
-           "registration); 0 = 1 % of the first frame's 99th-percentile range"}),
+           "registration); 0 = 1 % of the first frame's 99th-percentile range, grown when the "
+           "second frame or half the last 5 see twice as far"}),
       setting<S, &S::max_points_per_voxel>({"max-points-per-voxel",
                                             "max_points_per_voxel",
                                             {1.0, 10000.0},

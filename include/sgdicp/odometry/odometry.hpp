@@ -46,7 +46,8 @@ struct OdometrySettings {
   /// Points closer to the sensor are dropped (the vehicle, the operator's hand).
   double min_range_m = 0.0;
   /// Side of the map's voxels; 0 = 1 % of the first frame's range (its 99th percentile point
-  /// distance from the sensor, at most max_range_m): 0.5-0.8 m on KITTI, 3-4 cm on a Kinect.
+  /// distance from the sensor, at most max_range_m): 0.5-0.8 m on KITTI, 3-4 cm on a Kinect;
+  /// grown (the map regridded) when the second frame or half the last 5 see twice as far.
   /// Frames are thinned to one point per 0.75 voxel for the map and per 1.5 voxels for the
   /// registration.
   double voxel_size_m = 0.0;
@@ -247,6 +248,11 @@ class Odometry {
 
  private:
   void start(const PointCloud& cropped);
+  /// The adaptive threshold anew, its derived lengths from the voxel in use.
+  void start_threshold();
+  /// A derived voxel grows (the map regridded) when the last frames' range asks for twice it;
+  /// what the frame's report says of it ("" when it did not grow).
+  std::string grow_voxel(double range_m);
   [[nodiscard]] Eigen::Matrix4d predicted() const;
   /// A frame identical to the previous one: the previous pose, the motion model kept.
   Eigen::Matrix4d repeat_previous_pose(double started_ms);
@@ -296,6 +302,7 @@ class Odometry {
   SgdSettings sgd_;
   BatchSettings batch_;
   double voxel_size_m_ = 0.0;
+  std::vector<double> ranges_m_;  ///< of the last frames, for a derived voxel
   std::optional<VoxelMap> map_;
   std::optional<AdaptiveThreshold> threshold_;
   MotionModel motion_;
