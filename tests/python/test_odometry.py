@@ -62,6 +62,22 @@ def test_synthetic_sequence_follows_the_truth():
     assert odometry.map_points > 0
 
 
+def test_a_voxel_from_a_close_first_frame_grows_with_the_frames_range():
+    clouds, truth = sequence(6)
+    first = clouds[0][np.linalg.norm(clouds[0], axis=1) < 5.0]  # a sensor starting near a wall
+    odometry = sgd_icp.Odometry()
+    odometry.register_frame(first)
+    small = odometry.voxel_size
+    for cloud in clouds[1:]:
+        odometry.register_frame(cloud)
+    assert small < 0.05
+    assert odometry.voxel_size > 2 * small  # 1 % of the 12 m frames
+    assert "range grew" in odometry.reports[1].message
+    assert not any(r.failed for r in odometry.reports)
+    end_error = np.linalg.inv(truth[-1]) @ odometry.poses[-1]
+    assert np.linalg.norm(end_error[:3, 3]) < 0.05
+
+
 def test_an_empty_frame_fails_and_gets_the_prediction():
     clouds, _ = sequence(3)
     odometry = sgd_icp.Odometry()
