@@ -251,7 +251,8 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     report.message = "no point within the range limits";
     return finish(report, PointCloud{}, started);
   }
-  const std::string grown = map_->empty() ? "" : grow_voxel(range_percentile_m(cropped));
+  std::optional<VoxelBefore> grown;
+  if (!map_->empty()) grown = grow_voxel(range_percentile_m(cropped));
   const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
@@ -269,7 +270,19 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   report.map_points = index.size();
 
   register_to_map(source, index, range_percentile_m(map_frame), report);
-  if (!grown.empty()) report.message += "; " + grown;
+  if (report.failed) {
+    // A lost frame says nothing of the scene (a scan of another sensor, say): its range leaves
+    // the window, and a growth it asked for is taken back (the frame does not enter the map).
+    if (settings_.voxel_size_m <= 0.0) ranges_m_.pop_back();
+    if (grown) {
+      map_ = std::move(grown->map);
+      voxel_size_m_ = grown->voxel_size_m;
+      threshold_ = grown->threshold;
+    }
+  } else if (grown) {
+    report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
+                      format_number(voxel_size_m_) + " m (the frames' range grew)";
+  }
   return finish(report, map_frame, started);
 }
 
@@ -405,7 +418,7 @@ std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) co
 }
 
 namespace {
-constexpr std::size_t kRangeFrames = 5;  // registered frames whose range the voxel follows
+constexpr std::size_t kRangeFrames = 5;  // frames whose range the voxel follows
 constexpr double kVoxelGrowth = 2.0;     // the voxel grows once theirs is this many times larger
 }  // namespace
 
@@ -418,22 +431,23 @@ constexpr double kVoxelGrowth = 2.0;     // the voxel grows once theirs is this 
 // sensor can, never farther than the scene; later at least half of the last 5) asks for twice
 // the voxel or more. It never shrinks (a voxel too large costs precision, not time; shrinking
 // and growing back would rebuild the map at every doorway), nor changes when the user set it.
-// Returns what the frame's report says of it ("" when it did not grow).
-std::string Odometry::grow_voxel(double range_m) {
-  if (settings_.voxel_size_m > 0.0) return "";
+// A frame that is then lost takes its range and the growth back (register_frame): with two
+// frames the second alone decides, and a KITTI scan as the second of 7-Scenes frames grew the
+// voxel to 0.57 m and lost all the frames after it.
+// Returns what it replaced (nothing when the voxel did not grow).
+std::optional<Odometry::VoxelBefore> Odometry::grow_voxel(double range_m) {
+  if (settings_.voxel_size_m > 0.0) return std::nullopt;
   ranges_m_.push_back(range_m);
   if (ranges_m_.size() > kRangeFrames) ranges_m_.erase(ranges_m_.begin());
   const double voxel_m = kVoxelShare * median_of(ranges_m_);
-  if (voxel_m < kVoxelGrowth * voxel_size_m_) return "";
-  const std::string note = "voxel " + format_number(voxel_size_m_) + " -> " +
-                           format_number(voxel_m) + " m (the frames' range grew)";
+  if (voxel_m < kVoxelGrowth * voxel_size_m_) return std::nullopt;
+  VoxelBefore before{voxel_size_m_, std::move(*map_), *threshold_};
   // The map's points, with their surfaces, into the coarser grid (its bound per voxel applies).
-  VoxelMap grown(voxel_m, settings_.max_points_per_voxel);
-  grown.add(map_->points());
-  map_ = std::move(grown);
+  map_.emplace(voxel_m, settings_.max_points_per_voxel);
+  map_->add(before.map.points());
   voxel_size_m_ = voxel_m;
   start_threshold();  // the derived threshold lengths are shares of the voxel
-  return note;
+  return before;
 }
 
 void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& index,

@@ -250,9 +250,15 @@ class Odometry {
   void start(const PointCloud& cropped);
   /// The adaptive threshold anew, its derived lengths from the voxel in use.
   void start_threshold();
+  /// What a voxel growth replaced: taken back when the frame that asked for it is lost.
+  struct VoxelBefore {
+    double voxel_size_m;
+    VoxelMap map;
+    AdaptiveThreshold threshold;
+  };
   /// A derived voxel grows (the map regridded) when the last frames' range asks for twice it;
-  /// what the frame's report says of it ("" when it did not grow).
-  std::string grow_voxel(double range_m);
+  /// returns what it replaced (nothing when it did not grow).
+  std::optional<VoxelBefore> grow_voxel(double range_m);
   [[nodiscard]] Eigen::Matrix4d predicted() const;
   /// A frame identical to the previous one: the previous pose, the motion model kept.
   Eigen::Matrix4d repeat_previous_pose(double started_ms);
