@@ -114,6 +114,18 @@ TEST(OdometrySevenScenes, AScanOfAnotherSensorAsTheSecondFrameTakesItsVoxelGrowt
   EXPECT_EQ(odometry.voxel_size_m(), voxel_m);
 }
 
+// Each frame-to-frame motion of the odometry within 5 cm and 0.5 deg of the reference's
+// (T_world: the reference pose of each registered frame, in order).
+void expect_steps_follow(const Odometry& odometry, const std::vector<Eigen::Matrix4d>& T_world) {
+  for (std::size_t k = 1; k < T_world.size(); ++k) {
+    const Eigen::Matrix4d truth_step = T_world[k - 1].inverse() * T_world[k];
+    const Eigen::Matrix4d step = odometry.poses()[k - 1].inverse() * odometry.poses()[k];
+    EXPECT_LT(translation_error(step, truth_step), 0.05)
+        << k << ": " << odometry.reports()[k].message;
+    EXPECT_LT(rotation_error_geodesic(step, truth_step) * 180 / std::numbers::pi, 0.5) << k;
+  }
+}
+
 // Every `step`-th scan of the shared hand-held LiDAR scans from 0 to `last`: no frame lost, and
 // every frame-to-frame motion within 5 cm and 0.5 deg of the reference (the reference is good to
 // about 5 mm / 0.05 deg).
@@ -137,13 +149,7 @@ void expect_scans_tracked(const std::vector<std::size_t>& scans,
     T_world.push_back(truth.poses[i]);
   }
   EXPECT_EQ(odometry.lost_frames(), 0U);
-  for (std::size_t k = 1; k < T_world.size(); ++k) {
-    const Eigen::Matrix4d truth_step = T_world[k - 1].inverse() * T_world[k];
-    const Eigen::Matrix4d step_k = odometry.poses()[k - 1].inverse() * odometry.poses()[k];
-    EXPECT_LT(translation_error(step_k, truth_step), 0.05)
-        << k << ": " << odometry.reports()[k].message;
-    EXPECT_LT(rotation_error_geodesic(step_k, truth_step) * 180 / std::numbers::pi, 0.5) << k;
-  }
+  expect_steps_follow(odometry, T_world);
   if (reports) *reports = odometry.reports();
   if (done) done->emplace(std::move(odometry));
 }
@@ -237,13 +243,7 @@ TEST(OdometryHandheldLidar, AScanSpunBy150DegreesIsRecoveredByTheGlobalStart) {
   }
   EXPECT_EQ(odometry.lost_frames(), 0U);
   EXPECT_EQ(odometry.reports()[4].start, FrameStart::global) << odometry.reports()[4].message;
-  for (std::size_t k = 1; k < T_world.size(); ++k) {
-    const Eigen::Matrix4d truth_step = T_world[k - 1].inverse() * T_world[k];
-    const Eigen::Matrix4d step = odometry.poses()[k - 1].inverse() * odometry.poses()[k];
-    EXPECT_LT(translation_error(step, truth_step), 0.05)
-        << k << ": " << odometry.reports()[k].message;
-    EXPECT_LT(rotation_error_geodesic(step, truth_step) * 180 / std::numbers::pi, 0.5) << k;
-  }
+  expect_steps_follow(odometry, T_world);
 }
 
 }  // namespace
