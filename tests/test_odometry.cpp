@@ -5,7 +5,6 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
-#include <optional>
 #include <random>
 #include <sstream>
 #include <tuple>

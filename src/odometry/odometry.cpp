@@ -44,8 +44,11 @@ Eigen::Matrix4d rigid_inverse(const Eigen::Matrix4d& T) {
 // *The map's frame at three quarters of a voxel*).
 constexpr double kMapThinning = 0.75;
 constexpr double kSourceThinning = 1.5;
-// The derived voxel is this share of the frames' range (their 99th-percentile point distance).
+// The derived voxel is this share of the frames' range (their 99th-percentile point distance),
+// taken over the last kRangeFrames frames, and grows once theirs asks for kVoxelGrowth times it.
 constexpr double kVoxelShare = 0.01;
+constexpr std::size_t kRangeFrames = 5;
+constexpr double kVoxelGrowth = 2.0;
 
 // The 99th percentile of the point distances from the sensor (at most 20 000 points looked at).
 double range_percentile_m(const PointCloud& cloud) {
@@ -189,8 +192,7 @@ Odometry::Odometry(const OdometrySettings& settings, std::string_view method,
   batch_.validate();
 }
 
-void Odometry::start(const PointCloud& cropped) {
-  const double range_m = range_percentile_m(cropped);
+void Odometry::start(double range_m) {
   ranges_m_.assign(1, range_m);
   voxel_size_m_ =
       settings_.voxel_size_m > 0.0 ? settings_.voxel_size_m : std::max(kVoxelShare * range_m, 1e-3);
@@ -243,7 +245,9 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   }
   previous_points_ = frame.points;
   const PointCloud cropped = crop_range(frame, settings_.min_range_m, settings_.max_range_m);
-  if (!map_ && !cropped.empty()) start(cropped);
+  // The frame's range, which a derived voxel follows (start, grow_voxel); a set one needs none.
+  const double range_m = settings_.voxel_size_m > 0.0 ? 0.0 : range_percentile_m(cropped);
+  if (!map_ && !cropped.empty()) start(range_m);
   FrameReport report;
   report.T_first_frame = predicted();
   if (cropped.empty()) {
@@ -252,7 +256,7 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
     return finish(report, PointCloud{}, started);
   }
   std::optional<VoxelBefore> grown;
-  if (!map_->empty()) grown = grow_voxel(range_percentile_m(cropped));
+  if (!map_->empty()) grown = grow_voxel(range_m);
   const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
@@ -270,18 +274,19 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   report.map_points = index.size();
 
   register_to_map(source, index, range_percentile_m(map_frame), report);
-  if (report.failed) {
-    // A lost frame says nothing of the scene (a scan of another sensor, say): its range leaves
-    // the window, and a growth it asked for is taken back (the frame does not enter the map).
-    if (settings_.voxel_size_m <= 0.0) ranges_m_.pop_back();
+  if (report.failed && grown) {
+    // A lost frame says nothing of the scene (a scan of another sensor, say): a growth it asked
+    // for is taken back (the frame does not enter the map), and its range is not kept.
+    map_ = std::move(grown->map);
+    voxel_size_m_ = grown->voxel_size_m;
+    threshold_ = grown->threshold;
+  } else if (!report.failed) {
     if (grown) {
-      map_ = std::move(grown->map);
-      voxel_size_m_ = grown->voxel_size_m;
-      threshold_ = grown->threshold;
+      report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
+                        format_number(voxel_size_m_) + " m (the frames' range grew)";
     }
-  } else if (grown) {
-    report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
-                      format_number(voxel_size_m_) + " m (the frames' range grew)";
+    ranges_m_.push_back(range_m);  // the next frame's range joins these
+    if (ranges_m_.size() >= kRangeFrames) ranges_m_.erase(ranges_m_.begin());
   }
   return finish(report, map_frame, started);
 }
@@ -417,29 +422,24 @@ std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) co
          format_number(shift_m) + " m from it";
 }
 
-namespace {
-constexpr std::size_t kRangeFrames = 5;  // frames whose range the voxel follows
-constexpr double kVoxelGrowth = 2.0;     // the voxel grows once theirs is this many times larger
-}  // namespace
-
 // A derived voxel follows the frames' range upwards: taken from a first frame facing a wall or in
 // a small room, it stays a share of a range the sensor soon exceeds. The hand-held LiDAR's first
 // scan cropped to 5 m left 5 cm voxels for a 20 m scene: 4x the time and the memory, and the
 // second scan, tracked with a threshold of 2 such voxels, 0.7 m off (docs/design.md, *A voxel
-// that grows with the frames' range*). Before a frame is registered, its range joins the last
-// frames'; the voxel grows when their median (the larger of two: a frame may see less than the
-// sensor can, never farther than the scene; later at least half of the last 5) asks for twice
-// the voxel or more. It never shrinks (a voxel too large costs precision, not time; shrinking
-// and growing back would rebuild the map at every doorway), nor changes when the user set it.
-// A frame that is then lost takes its range and the growth back (register_frame): with two
-// frames the second alone decides, and a KITTI scan as the second of 7-Scenes frames grew the
-// voxel to 0.57 m and lost all the frames after it.
-// Returns what it replaced (nothing when the voxel did not grow).
+// that grows with the frames' range*). Before a frame is registered, its range joins those of the
+// last registered frames (ranges_m_); the voxel grows when their median (the larger of two: a frame
+// may see less than the sensor can, never farther than the scene; later at least half of the last
+// 5) asks for twice the voxel or more. It never shrinks (a voxel too large costs precision, not
+// time; shrinking and growing back would rebuild the map at every doorway), nor changes when the
+// user set it. A frame that is then lost takes the growth back, and its range is not kept
+// (register_frame): with two frames the second alone decides, and a KITTI scan as the second of
+// 7-Scenes frames grew the voxel to 0.57 m and lost all the frames after it. Returns what it
+// replaced (nothing when the voxel did not grow).
 std::optional<Odometry::VoxelBefore> Odometry::grow_voxel(double range_m) {
   if (settings_.voxel_size_m > 0.0) return std::nullopt;
-  ranges_m_.push_back(range_m);
-  if (ranges_m_.size() > kRangeFrames) ranges_m_.erase(ranges_m_.begin());
-  const double voxel_m = kVoxelShare * median_of(ranges_m_);
+  std::vector<double> ranges = ranges_m_;
+  ranges.push_back(range_m);
+  const double voxel_m = kVoxelShare * median_of(std::move(ranges));
   if (voxel_m < kVoxelGrowth * voxel_size_m_) return std::nullopt;
   VoxelBefore before{voxel_size_m_, std::move(*map_), *threshold_};
   // The map's points, with their surfaces, into the coarser grid (its bound per voxel applies).

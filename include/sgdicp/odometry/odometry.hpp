@@ -247,7 +247,8 @@ class Odometry {
   [[nodiscard]] std::string_view method() const noexcept { return method_->name; }
 
  private:
-  void start(const PointCloud& cropped);
+  /// The map and the threshold for the first frame with points, whose range is range_m.
+  void start(double range_m);
   /// The adaptive threshold anew, its derived lengths from the voxel in use.
   void start_threshold();
   /// What a voxel growth replaced: taken back when the frame that asked for it is lost.
@@ -308,7 +309,7 @@ class Odometry {
   SgdSettings sgd_;
   BatchSettings batch_;
   double voxel_size_m_ = 0.0;
-  std::vector<double> ranges_m_;  ///< of the last frames, for a derived voxel
+  std::vector<double> ranges_m_;  ///< of the first and the last registered frames (grow_voxel)
   std::optional<VoxelMap> map_;
   std::optional<AdaptiveThreshold> threshold_;
   MotionModel motion_;
