@@ -19,6 +19,7 @@
 #include "sgdicp/metrics/trajectory_metrics.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/odometry/voxel_map.hpp"
+#include "sgdicp/surfaces/prepare_reference.hpp"
 
 namespace sgdicp {
 namespace {
@@ -81,6 +82,24 @@ TEST(VoxelMap, AdmittedAreThePointsAddKeeps) {
     };
     EXPECT_EQ(sorted(rebuilt.points().points), sorted(map.points().points)) << round;
   }
+}
+
+// A frame whose every point falls in full voxels comes as an empty cloud with no normals: it must
+// leave the map's surfaces as they are (it ended them, and the next frame's plane cost failed).
+TEST(VoxelMap, AnEmptyCloudKeepsTheSurfaces) {
+  VoxelMap map(1.0, 1);
+  PointCloud c = cloud_of({{0.5F, 0.5F, 0.5F}, {2.5F, 0.5F, 0.5F}});
+  c.normals.assign(2, Eigen::Vector3f::UnitZ());
+  map.add(c);
+  ASSERT_TRUE(map.points().has_normals());
+  const std::vector<std::uint32_t> none = map.admitted(c);
+  EXPECT_TRUE(none.empty());  // both voxels are full
+  map.add(PointCloud{});
+  EXPECT_TRUE(map.points().has_normals());
+  EXPECT_NO_THROW(check_reference_prepared(map.index(), CostType::point_to_plane));
+  // A cloud with points and without normals still ends them: a cost reads all or none.
+  map.add(cloud_of({{4.5F, 0.5F, 0.5F}}));
+  EXPECT_FALSE(map.points().has_normals());
 }
 
 TEST(VoxelMap, NegativeCoordinatesGetTheirOwnVoxels) {
@@ -394,6 +413,27 @@ TEST(Odometry, TrackingTakesGaussNewtonStepsUnlessAStepRuleIsChosen) {
   EXPECT_LT(newton_iterations, 0.85 * static_cast<double>(adam_iterations));
   EXPECT_LT(newton_drift.translation_m, 0.05);
   EXPECT_LT(newton_drift.rotation_deg, 0.3);
+}
+
+// Two views of one place fed back and forth, as a robot that paces a corridor: the map's voxels
+// fill, and soon a frame adds no point to the map. The map's normals must outlive that frame (the
+// frame after it found none: "the point-to-plane cost needs reference normals", issue 54).
+TEST(Odometry, AFrameThatAddsNoPointKeepsTheMapsSurfaces) {
+  const auto seq = test::synthetic_sequence(2, 0.2, 2.0, 21, 6000);
+  OdometrySettings settings;
+  settings.max_points_per_voxel = 1;
+  Odometry odometry(settings);
+  std::size_t added_none = 0;
+  for (std::size_t k = 0; k < 6; ++k) {
+    const std::size_t map_size = odometry.map() ? odometry.map()->size() : 0;
+    odometry.register_frame(seq.frames[k % 2]);
+    const FrameReport& r = odometry.reports().back();
+    ASSERT_FALSE(r.failed) << "frame " << k << ": " << r.message;
+    EXPECT_TRUE(odometry.map()->points().has_normals()) << "frame " << k;
+    if (k > 0 && odometry.map()->size() == map_size) ++added_none;
+  }
+  EXPECT_GE(added_none, 3U);  // the case is met
+  EXPECT_LT(translation_error(odometry.poses().back(), seq.T_world_frame[1]), 0.02);
 }
 
 // A sensor delivering the same frame again and again (a stalled driver): ten repeats each keep

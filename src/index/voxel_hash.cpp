@@ -62,6 +62,10 @@ std::vector<std::uint32_t> VoxelHash::admitted(const PointCloud& cloud) const {
 // One pass: a point is admitted by the counts as they stand, which already hold the points of
 // `cloud` added before it (the rule admitted() states, without its second table).
 void VoxelHash::add(const PointCloud& cloud) {
+  // A cloud of no points adds nothing and says nothing of surfaces (an odometry frame whose every
+  // point falls in full voxels comes as one): taken as "without normals" it ended them for the
+  // whole map, and the next frame's plane cost found none (issue 54: frame 1534 of a long run).
+  if (cloud.empty()) return;
   if (cloud_.empty()) {
     normals_ = cloud.has_normals();
     covariances_ = cloud.has_covariances();

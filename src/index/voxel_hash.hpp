@@ -44,7 +44,8 @@ class VoxelHash {
   /// while its voxel holds fewer than the bound, counting those of `cloud` before it.
   [[nodiscard]] std::vector<std::uint32_t> admitted(const PointCloud& cloud) const;
   /// Adds the admitted points of `cloud` at the end of cloud(), with their normals (covariances)
-  /// while every point added since the hash was last empty came with one. Throws
+  /// while every point added since the hash was last empty came with one; a cloud of no points
+  /// changes nothing. Throws
   /// InvalidSettingsError for a coordinate too large for the cell size, InvalidInputError beyond
   /// 2^32 - 1 points.
   void add(const PointCloud& cloud);
