@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <new>
 #include <optional>
 
 #include "cli_common.hpp"
@@ -75,24 +77,63 @@ double median_of(std::vector<double> v) {
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
 }
 
-void write_report_csv(const std::string& path, const FrameSource& source,
-                      const std::vector<FrameReport>& reports) {
-  std::ofstream out(path);
-  if (!out) throw IoError(path + ": cannot open for writing");
-  out << "frame,file,failed,recovered,start,converged,iterations,source_points,map_points,"
-         "overlap,inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n"
-      << std::setprecision(6);
-  for (const auto& r : reports) {
-    std::string message = r.message;
-    std::replace(message.begin(), message.end(), '"', '\'');
-    out << r.index << ',' << source.frames[r.index].filename().string() << ',' << r.failed << ','
-        << r.recovered << ',' << enum_name(r.start) << ',' << r.converged << ',' << r.iterations
-        << ',' << r.source_points << ',' << r.map_points << ',' << r.overlap << ','
-        << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ','
-        << r.index_build_ms << ',' << r.time_ms << ",\"" << message << "\"\n";
-  }
-  if (!out) throw IoError(path + ": write error");
+constexpr std::string_view kReportHeader =
+    "frame,file,failed,recovered,start,converged,iterations,source_points,map_points,overlap,"
+    "inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n";
+
+void write_report_row(std::ostream& out, const FrameSource& source, const FrameReport& r) {
+  std::string message = r.message;
+  std::replace(message.begin(), message.end(), '"', '\'');
+  out << std::setprecision(6) << r.index << ',' << source.frames[r.index].filename().string() << ','
+      << r.failed << ',' << r.recovered << ',' << enum_name(r.start) << ',' << r.converged << ','
+      << r.iterations << ',' << r.source_points << ',' << r.map_points << ',' << r.overlap << ','
+      << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ',' << r.index_build_ms
+      << ',' << r.time_ms << ",\"" << message << "\"\n";
 }
+
+// The per-frame files, written as the run goes: a frame's lines are on disk (flushed) before the
+// next frame is read, so a run stopped by an error, a signal or a crash keeps every pose it had.
+// Opened with the first frame's lines: an unwritable name fails after one frame, not after a long
+// run, and settings that no frame can be read with leave no file behind.
+class FrameWriters {
+ public:
+  FrameWriters(const OdometryOptions& o, std::vector<double> timestamps_s)
+      : o_(o), timestamps_s_(std::move(timestamps_s)) {}
+
+  // The lines of the frame reported last.
+  void write(const FrameSource& source, const Odometry& odometry) {
+    if (!poses_.is_open()) {
+      open(poses_, o_.poses_out);
+      if (!o_.tum.empty()) open(tum_, o_.tum) << kTumHeader;
+      if (!o_.report.empty()) open(report_, o_.report) << kReportHeader;
+    }
+    const FrameReport& r = odometry.reports().back();
+    write_kitti_pose(poses_, r.T_first_frame);
+    check(poses_.flush(), o_.poses_out);
+    if (tum_.is_open()) {
+      write_tum_pose(tum_, timestamps_s_[r.index], r.T_first_frame);
+      check(tum_.flush(), o_.tum);
+    }
+    if (report_.is_open()) {
+      write_report_row(report_, source, r);
+      check(report_.flush(), o_.report);
+    }
+  }
+
+ private:
+  static std::ofstream& open(std::ofstream& out, const std::string& path) {
+    out.open(path);
+    if (!out) throw IoError(path + ": cannot open for writing");
+    return out;
+  }
+  static void check(const std::ostream& out, const std::string& path) {
+    if (!out) throw IoError(path + ": write error");
+  }
+
+  const OdometryOptions& o_;
+  std::vector<double> timestamps_s_;
+  std::ofstream poses_, tum_, report_;
+};
 
 // The timestamps of the first `frames` frames, or nothing when the source does not give them.
 std::vector<double> frame_times_s(const FrameSource& source, std::size_t frames) {
@@ -195,27 +236,77 @@ AbsoluteTrajectoryError print_evaluation(const std::vector<Eigen::Matrix4d>& est
 }
 
 // Registers frame `i`, or records it as skipped when it cannot be read; returns whether it could.
-bool register_or_skip(Odometry& odometry, const FrameSource& source, std::size_t i) {
+// Registering never throws but for lack of memory (Odometry::register_frame); nor does a bad file.
+// Settings that the frames cannot be read with (a depth border wider than the image) show on the
+// first frame: until a frame was read they end the run; after, they are the frame's (a depth image
+// of another size in the folder).
+bool register_or_skip(Odometry& odometry, const FrameSource& source, std::size_t i, bool any_read) {
+  PointCloud frame;
   try {
-    odometry.register_frame(naming_depth_options([&] { return source.read(i); }));
-    return true;
-  } catch (const IoError& e) {
+    frame = naming_depth_options([&] { return source.read(i); });
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const InvalidSettingsError& e) {
+    if (!any_read) throw;
+    odometry.skip_frame(std::string("unreadable with these settings: ") + e.what());
+    return false;
+  } catch (const std::exception& e) {
     odometry.skip_frame(std::string("unreadable: ") + e.what());
-  } catch (const FormatError& e) {
-    odometry.skip_frame(std::string("unreadable: ") + e.what());
+    return false;
   }
-  return false;
+  odometry.register_frame(frame);
+  return true;
 }
 
-// Runs the odometry over the first `frames` frames, with a line per lost frame and
-// the progress on stderr (unless --quiet); returns the number of unreadable frames.
-std::size_t register_frames(const OdometryOptions& o, const FrameSource& source, std::size_t frames,
-                            Odometry& odometry, std::chrono::steady_clock::time_point start) {
-  auto last_progress = start;
+// SIGINT and SIGTERM stop the run after the frame in hand: the map, the summary and every pose so
+// far are written. A second signal ends the process at once (the per-frame files are on disk).
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void on_stop_signal(int signal) {
+  g_stop_signal = signal;
+  std::signal(signal, SIG_DFL);
+}
+
+class StopOnSignal {
+ public:
+  StopOnSignal() {
+    g_stop_signal = 0;
+    interrupt_ = std::signal(SIGINT, on_stop_signal);
+    terminate_ = std::signal(SIGTERM, on_stop_signal);
+  }
+  ~StopOnSignal() {
+    std::signal(SIGINT, interrupt_);
+    std::signal(SIGTERM, terminate_);
+  }
+  StopOnSignal(const StopOnSignal&) = delete;
+  StopOnSignal& operator=(const StopOnSignal&) = delete;
+  [[nodiscard]] static int received() noexcept { return g_stop_signal; }
+
+ private:
+  void (*interrupt_)(int);
+  void (*terminate_)(int);
+};
+
+struct RunCount {
+  std::size_t frames = 0;  // registered or skipped
   std::size_t unreadable = 0;
+};
+
+// Runs the odometry over the first `frames` frames (fewer when a signal stops it), writing each
+// frame's lines as it goes, with a line per lost frame and the progress on stderr (unless
+// --quiet).
+RunCount register_frames(const OdometryOptions& o, const FrameSource& source, std::size_t frames,
+                         Odometry& odometry, FrameWriters& writers,
+                         std::chrono::steady_clock::time_point start) {
+  auto last_progress = start;
+  RunCount count;
   bool progress_open = false;  // a progress line without its newline is on stderr
-  for (std::size_t i = 0; i < frames; ++i) {
-    if (!register_or_skip(odometry, source, i)) ++unreadable;
+  for (std::size_t i = 0; i < frames && StopOnSignal::received() == 0; ++i) {
+    if (!register_or_skip(odometry, source, i, count.unreadable < count.frames)) {
+      ++count.unreadable;
+    }
+    ++count.frames;
+    writers.write(source, odometry);
     const FrameReport& r = odometry.reports().back();
     if (r.failed && !o.quiet) {
       std::cerr << (progress_open ? "\n" : "") << "frame " << i << " ("
@@ -233,21 +324,21 @@ std::size_t register_frames(const OdometryOptions& o, const FrameSource& source,
       progress_open = i + 1 != frames;
     }
   }
-  return unreadable;
+  if (progress_open) std::cerr << '\n';
+  return count;
 }
 
-// The trajectory files: KITTI poses, TUM (timestamps from the source, else frame / rate), report.
-void write_outputs(const OdometryOptions& o, const FrameSource& source, std::size_t frames,
-                   double rate_hz, const Odometry& odometry) {
-  write_kitti_poses(o.poses_out, odometry.poses());
-  if (!o.tum.empty()) {
-    std::vector<double> times = frame_times_s(source, frames);
-    if (times.empty()) {
-      for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
-    }
-    write_tum_trajectory(o.tum, odometry.poses(), times);
+// The TUM timestamps of the first `frames` frames: the source's, else frame / rate.
+std::vector<double> tum_timestamps_s(const FrameSource& source, std::size_t frames,
+                                     double rate_hz) {
+  std::vector<double> times = frame_times_s(source, frames);
+  if (times.empty()) {
+    for (std::size_t i = 0; i < frames; ++i) times.push_back(static_cast<double>(i) / rate_hz);
   }
-  if (!o.report.empty()) write_report_csv(o.report, source, odometry.reports());
+  return times;
+}
+
+void write_map(const OdometryOptions& o, const Odometry& odometry) {
   if (!o.map_out.empty()) write_point_cloud(o.map_out, odometry.map_cloud(o.map_voxel_m));
 }
 
@@ -268,8 +359,10 @@ void check_map_options(const OdometryOptions& o) {
 
 // The run in numbers: frames, failures, time per frame, map size, files written.
 void print_run_summary(const OdometryOptions& o, const std::string& method,
-                       const FrameSource& source, std::size_t frames, std::size_t unreadable,
-                       const Odometry& odometry, std::chrono::steady_clock::time_point start) {
+                       const FrameSource& source, const RunCount& count, const Odometry& odometry,
+                       std::chrono::steady_clock::time_point start) {
+  const std::size_t frames = count.frames;
+  const std::size_t unreadable = count.unreadable;
   std::vector<double> times_ms;
   for (const auto& r : odometry.reports()) times_ms.push_back(r.time_ms);
   const double total_s =
@@ -279,8 +372,8 @@ void print_run_summary(const OdometryOptions& o, const std::string& method,
             << "frames: " << frames << ", lost: " << odometry.lost_frames()
             << " (unreadable: " << unreadable << "), recovered: " << odometry.recovered_frames()
             << ", time per frame: median " << median_of(times_ms) << " ms, max "
-            << *std::max_element(times_ms.begin(), times_ms.end()) << " ms, "
-            << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
+            << (times_ms.empty() ? 0.0 : *std::max_element(times_ms.begin(), times_ms.end()))
+            << " ms, " << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
             << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
             << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
             << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum)
@@ -321,14 +414,33 @@ void run(const OdometryOptions& o) {
   if (!o.ground_truth.empty()) truth = load_ground_truth(o, source, frames);
 
   Odometry odometry(settings, method.name, method.sgd, method.batch);
+  FrameWriters writers(o, tum_timestamps_s(source, frames, rate_hz));
+  const StopOnSignal stop;
   const auto start = std::chrono::steady_clock::now();
-  const std::size_t unreadable = register_frames(o, source, frames, odometry, start);
-  if (unreadable == frames) {
+  RunCount count;
+  try {
+    count = register_frames(o, source, frames, odometry, writers, start);
+  } catch (...) {
+    // Out of memory, or a file that cannot be written: the poses so far are on disk; the map too.
+    try {
+      write_map(o, odometry);
+    } catch (const std::exception& e) {
+      std::cerr << "sgdicp: could not write the map: " << e.what() << '\n';
+    }
+    throw;
+  }
+  if (count.frames > 0 && count.unreadable == count.frames) {
     throw FormatError(
         o.input + ": no frame could be read (first: " + odometry.reports().front().message + ")");
   }
-  write_outputs(o, source, frames, rate_hz, odometry);
-  print_run_summary(o, method.name, source, frames, unreadable, odometry, start);
+  write_map(o, odometry);
+  print_run_summary(o, method.name, source, count, odometry, start);
+  if (count.frames < frames) {
+    throw ExitStatus("stopped by signal " + std::to_string(StopOnSignal::received()) + " after " +
+                         std::to_string(count.frames) + " of " + std::to_string(frames) +
+                         " frames: their poses, report and the map are written",
+                     128 + StopOnSignal::received());
+  }
   evaluate_and_draw(o, odometry.poses(), truth);
 }
 
@@ -352,8 +464,9 @@ void add_odometry_command(CLI::App& app) {
                   "camera-intrinsics.txt)")
       ->required();
   cmd->add_option("--poses-out", o->poses_out,
-                  "Write the trajectory here: one line per frame, the 3x4 row-major pose "
-                  "T_first_frame (KITTI format; the first line is the identity)")
+                  "Write the trajectory here, frame by frame as the run goes: one line per frame, "
+                  "the 3x4 row-major pose T_first_frame (KITTI format; the first line is the "
+                  "identity)")
       ->required();
   cmd->add_option("--tum", o->tum,
                   "Also write the trajectory in the TUM format (timestamp tx ty tz qx qy qz qw), "
@@ -380,8 +493,8 @@ void add_odometry_command(CLI::App& app) {
                   "Write one CSV row per frame (failed, recovered, start, converged, iterations, "
                   "points, overlap, inliers, threshold, times, message)");
   cmd->add_option("--map-out", o->map_out,
-                  "Write the local map at the end (the first frame's coordinates, metres): PLY, "
-                  "PCD or XYZ by the extension");
+                  "Write the local map at the end, or when a signal stops the run (the first "
+                  "frame's coordinates, metres): PLY, PCD or XYZ by the extension");
   cmd->add_option("--map-voxel", o->map_voxel_m,
                   "Thin the written map to one centroid per voxel of this side, m [default: 0 = "
                   "the map as kept, up to --max-points-per-voxel per map voxel]");

@@ -158,4 +158,67 @@ if [ -f "$SEVEN/camera-intrinsics.txt" ]; then
 else
   echo "SKIP: 7-Scenes frames (no $SEVEN)"
 fi
+BALM="$SHARED/balm_handheld_lidar/scans"
+if [ -d "$BALM" ] && [ -d "$SHARED/kitti_odometry_seq00/velodyne" ]; then
+  # A hostile folder (docs/odometry.md, *Long runs*): frames out of order (12 before 10 and 11),
+  # one twice, an empty file, a truncated file, a KITTI car scan among the hand-held LiDAR's, a gap
+  # of 15 scans and the way back. Each is reported on its own row; the run goes on.
+  mkdir -p "$tmp/hostile"
+  k=0
+  for e in 0 1 2 3 4 5 6 7 8 9 12 10 11 13 13 empty 14 15 truncated kitti 16 17 18 33 34 35 34 33 32 31; do
+    f="$tmp/hostile/$(printf '%06d' $k).bin"
+    case "$e" in
+      empty) : >"$f" ;;
+      truncated) head -c 63 "$BALM/$(ls "$BALM" | head -1)" >"$f" ;;
+      kitti) ln -s "$SHARED/kitti_odometry_seq00/velodyne/000000.bin" "$f" ;;
+      *) ln -s "$BALM/$(ls "$BALM" | sed -n "$((e + 1))p")" "$f" ;;
+    esac
+    k=$((k + 1))
+  done
+  run odometry "$tmp/hostile" --poses-out "$tmp/h.txt" --report "$tmp/h.csv" -q
+  # Rows 15, 18, 19 (empty, truncated, KITTI) failed; 14 repeated; every other registered.
+  failed_rows=$(awk -F, 'NR > 1 && $3 == 1 { printf "%s ", $1 }' "$tmp/h.csv")
+  if [ "$rc" -eq 0 ] && [ "$failed_rows" = "15 18 19 " ] && [ "$(grep -c . "$tmp/h.txt")" -eq 30 ] &&
+    grep -q '^14,.*repeated frame' "$tmp/h.csv" && grep -q '^15,.*unreadable: .*empty file' "$tmp/h.csv" &&
+    grep -q 'frames: 30, lost: 3 (unreadable: 2)' "$tmp/out" && ! grep -q 'internal error' "$tmp/h.csv"; then
+    pass "odometry on a hostile folder: each bad frame reported on its row (failed: $failed_rows), the run goes on"
+  else
+    fail "odometry on a hostile folder (exit $rc): failed rows '$failed_rows' $(head -c 400 "$tmp/err")"
+  fi
+
+  # A long run stopped by a signal keeps every pose it had: the files grow as the run goes, and
+  # SIGINT (SIGTERM) ends it after the frame in hand with the map and the summary written.
+  mkdir -p "$tmp/long"
+  ls "$BALM" | head -40 >"$tmp/names"
+  for k in $(seq 0 399); do
+    i=$((k % 78)); [ "$i" -ge 40 ] && i=$((78 - i))
+    ln -s "$BALM/$(sed -n "$((i + 1))p" "$tmp/names")" "$tmp/long/$(printf '%06d' $k).bin"
+  done
+  for signal in INT TERM; do
+    rm -f "$tmp/l.txt" "$tmp/l.csv" "$tmp/l.ply"
+    "$BIN" odometry "$tmp/long" --poses-out "$tmp/l.txt" --report "$tmp/l.csv" --map-out "$tmp/l.ply" -q \
+      >"$tmp/out" 2>"$tmp/err" &
+    pid=$!
+    for _ in $(seq 1 100); do
+      [ "$(cat "$tmp/l.txt" 2>/dev/null | wc -l)" -ge 5 ] && break
+      sleep 0.1
+    done
+    running=$(cat "$tmp/l.txt" 2>/dev/null | wc -l)
+    kill -"$signal" "$pid"
+    wait "$pid"
+    rc=$?
+    want=$((128 + $(kill -l "$signal")))
+    poses=$(grep -c . "$tmp/l.txt")
+    if [ "$running" -ge 5 ] && [ "$rc" -eq "$want" ] && [ "$poses" -lt 400 ] &&
+      [ "$(grep -c . "$tmp/l.csv")" -eq $((poses + 1)) ] && [ -s "$tmp/l.ply" ] &&
+      grep -q "stopped by signal $(kill -l "$signal") after $poses of 400 frames" "$tmp/err" &&
+      grep -q "frames: $poses, lost: 0" "$tmp/out"; then
+      pass "odometry stopped by SIG$signal after $poses frames: exit $rc, every pose, its report row and the map written"
+    else
+      fail "odometry stopped by SIG$signal (exit $rc, $poses poses, $running while running): $(head -c 400 "$tmp/err")"
+    fi
+  done
+else
+  echo "SKIP: hostile and interrupted runs (no $BALM or KITTI scans)"
+fi
 finish

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -244,6 +245,85 @@ TEST(OdometryHandheldLidar, AScanSpunBy150DegreesIsRecoveredByTheGlobalStart) {
   EXPECT_EQ(odometry.lost_frames(), 0U);
   EXPECT_EQ(odometry.reports()[4].start, FrameStart::global) << odometry.reports()[4].message;
   expect_steps_follow(odometry, T_world);
+}
+
+// One entry of a hostile sequence: a scan of the hand-held LiDAR, or something else in its place.
+struct HostileFrame {
+  enum Kind { scan, repeat, empty, non_finite, unreadable, other_sensor } kind = scan;
+  std::size_t index = 0;  // the scan (kind scan)
+};
+
+// What a long run meets, mixed into the hand-held LiDAR's scans: frames out of order (12 before
+// 10 and 11), the same frame twice, an empty frame, a frame of NaN points, an unreadable file, a
+// scan of another sensor (a KITTI car LiDAR), a gap of 15 scans (1.5 s: 3.4 m and 62 deg), and the
+// path walked back. Each is reported on its own frame and none ends the run; every scan is
+// registered, and its pose, from the first scan, within 10 cm and 1 deg of the reference's.
+TEST(OdometryHandheldLidar, AHostileSequenceIsReportedFrameByFrameAndTheTrackResumes) {
+  const auto folder = std::filesystem::path(SGDICP_SHARED_DATA) / "balm_handheld_lidar";
+  if (!std::filesystem::exists(folder / "poses.txt") ||
+      !std::filesystem::exists(kKitti / "velodyne")) {
+    GTEST_SKIP() << "no " << folder << " or " << kKitti;
+  }
+  using K = HostileFrame::Kind;
+  std::vector<HostileFrame> sequence;
+  for (std::size_t i : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 12, 10, 11, 13})
+    sequence.push_back({K::scan, i});
+  sequence.push_back({K::repeat});
+  sequence.push_back({K::empty});
+  for (std::size_t i : {14, 15}) sequence.push_back({K::scan, i});
+  sequence.push_back({K::non_finite});
+  sequence.push_back({K::unreadable});
+  sequence.push_back({K::other_sensor});
+  for (std::size_t i : {16, 17, 18, 33, 34, 35, 34, 33, 32, 31}) sequence.push_back({K::scan, i});
+  const FrameSource source = open_frame_source(folder / "scans");
+  const Trajectory truth = read_kitti_poses(folder / "poses.txt");
+  Odometry odometry;
+  PointCloud last;
+  for (const HostileFrame& f : sequence) {
+    switch (f.kind) {
+      case K::scan:
+        last = source.read(f.index);
+        odometry.register_frame(last);
+        break;
+      case K::repeat:
+        odometry.register_frame(last);
+        break;
+      case K::empty:
+        odometry.register_frame(PointCloud{});
+        break;
+      case K::non_finite: {
+        PointCloud nans = last;
+        for (auto& p : nans.points) p.setConstant(std::numeric_limits<float>::quiet_NaN());
+        odometry.register_frame(nans);
+        break;
+      }
+      case K::unreadable:
+        odometry.skip_frame("unreadable: a truncated file");
+        break;
+      case K::other_sensor:
+        odometry.register_frame(read_point_cloud(kKitti / "velodyne" / "000000.bin").cloud);
+        break;
+    }
+  }
+  ASSERT_EQ(odometry.reports().size(), sequence.size());
+  for (std::size_t k = 0; k < sequence.size(); ++k) {
+    const FrameReport& r = odometry.reports()[k];
+    const HostileFrame& f = sequence[k];
+    SCOPED_TRACE("frame " + std::to_string(k) + ": " + r.message);
+    EXPECT_EQ(r.message.find(kInternalError), std::string::npos);
+    if (f.kind == K::repeat) {
+      EXPECT_TRUE(r.repeated);
+      EXPECT_FALSE(r.failed);
+    } else if (f.kind != K::scan) {
+      EXPECT_TRUE(r.failed);
+    } else {
+      EXPECT_FALSE(r.failed);
+      const Eigen::Matrix4d T_truth = truth.poses[0].inverse() * truth.poses[f.index];
+      EXPECT_LT(translation_error(odometry.poses()[k], T_truth), 0.10);
+      EXPECT_LT(rotation_error_geodesic(odometry.poses()[k], T_truth) * 180 / std::numbers::pi,
+                1.0);
+    }
+  }
 }
 
 }  // namespace

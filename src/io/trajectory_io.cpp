@@ -164,18 +164,29 @@ Trajectory read_trajectory(const std::filesystem::path& path) {
   throw FormatError(path.string() + ": no pose in the file");
 }
 
+void write_kitti_pose(std::ostream& out, const Eigen::Matrix4d& T) {
+  const std::streamsize precision = out.precision(9);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) out << (r || c ? " " : "") << T(r, c) + 0.0;  // -0 prints as 0
+  }
+  out << '\n';
+  out.precision(precision);
+}
+
+void write_tum_pose(std::ostream& out, double timestamp_s, const Eigen::Matrix4d& T) {
+  const std::streamsize precision = out.precision();
+  const Eigen::Quaterniond q(Eigen::Matrix3d(T.topLeftCorner<3, 3>()));
+  out << std::fixed << std::setprecision(6) << timestamp_s << std::defaultfloat
+      << std::setprecision(9) << ' ' << T(0, 3) << ' ' << T(1, 3) << ' ' << T(2, 3) << ' ' << q.x()
+      << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+  out.precision(precision);
+}
+
 void write_kitti_poses(const std::filesystem::path& path,
                        const std::vector<Eigen::Matrix4d>& poses) {
   std::ofstream out(path);
   if (!out) throw IoError(path.string() + ": cannot open for writing: " + std::strerror(errno));
-  out << std::setprecision(9);
-  for (const auto& T : poses) {
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c)
-        out << (r || c ? " " : "") << T(r, c) + 0.0;  // + 0.0: -0 prints as 0
-    }
-    out << '\n';
-  }
+  for (const auto& T : poses) write_kitti_pose(out, T);
   if (!out) throw IoError(path.string() + ": write error");
 }
 
@@ -188,13 +199,8 @@ void write_tum_trajectory(const std::filesystem::path& path,
   }
   std::ofstream out(path);
   if (!out) throw IoError(path.string() + ": cannot open for writing: " + std::strerror(errno));
-  out << "# timestamp tx ty tz qx qy qz qw\n" << std::setprecision(9);
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const Eigen::Quaterniond q(Eigen::Matrix3d(poses[i].topLeftCorner<3, 3>()));
-    out << std::fixed << std::setprecision(6) << timestamps_s[i] << std::defaultfloat
-        << std::setprecision(9) << ' ' << poses[i](0, 3) << ' ' << poses[i](1, 3) << ' '
-        << poses[i](2, 3) << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
-  }
+  out << kTumHeader;
+  for (std::size_t i = 0; i < poses.size(); ++i) write_tum_pose(out, timestamps_s[i], poses[i]);
   if (!out) throw IoError(path.string() + ": write error");
 }
 

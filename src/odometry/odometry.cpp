@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <new>
 #include <numbers>
+#include <stdexcept>
 #include <utility>
 
 #include "sgdicp/core/error.hpp"
@@ -230,16 +232,35 @@ std::size_t Odometry::recovered_frames() const noexcept {
 }
 
 Eigen::Matrix4d Odometry::skip_frame(const std::string& message) {
+  return fail_frame(message, now_ms());
+}
+
+Eigen::Matrix4d Odometry::fail_frame(const std::string& message, double started_ms) {
   FrameReport report;
   report.failed = true;
   report.message = message;
   report.T_first_frame = predicted();
   previous_points_.clear();
-  return finish(report, PointCloud{}, now_ms());
+  return finish(report, PointCloud{}, started_ms);
 }
 
+// Whatever goes wrong while one frame is registered is that frame's failure: a long run loses the
+// frame, never the run (issue 54). The library's own errors say what was wrong with the frame;
+// anything else is a bug and says so. Out of memory alone ends the run.
 Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   const double started = now_ms();
+  try {
+    return register_frame_unguarded(frame, started);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const Error& e) {
+    return fail_frame(std::string("registration failed: ") + e.what(), started);
+  } catch (const std::exception& e) {
+    return fail_frame(std::string(kInternalError) + e.what(), started);
+  }
+}
+
+Eigen::Matrix4d Odometry::register_frame_unguarded(const PointCloud& frame, double started) {
   if (!poses_.empty() && !frame.empty() && frame.points == previous_points_) {
     return repeat_previous_pose(started);
   }
@@ -257,6 +278,17 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   }
   std::optional<VoxelBefore> grown;
   if (!map_->empty()) grown = grow_voxel(range_m);
+  try {
+    return register_on_grid(cropped, range_m, grown, report, started);
+  } catch (...) {
+    take_back(grown);  // the frame fails: a growth it asked for goes with it
+    throw;
+  }
+}
+
+Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double range_m,
+                                           std::optional<VoxelBefore>& grown, FrameReport& report,
+                                           double started) {
   const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
@@ -269,32 +301,58 @@ Eigen::Matrix4d Odometry::register_frame(const PointCloud& frame) {
   const double build_start = now_ms();
   // The map is its own index, with its surfaces: nothing is copied or built (docs/design.md).
   const ReferenceIndex index = map_->index();
-  check_reference_prepared(index, cost());
   report.index_build_ms = now_ms() - build_start;
   report.map_points = index.size();
+  check_map_surfaces(index);
 
   register_to_map(source, index, range_percentile_m(map_frame), report);
-  if (report.failed && grown) {
+  if (report.failed) {
     // A lost frame says nothing of the scene (a scan of another sensor, say): a growth it asked
     // for is taken back (the frame does not enter the map), and its range is not kept.
-    map_ = std::move(grown->map);
-    voxel_size_m_ = grown->voxel_size_m;
-    threshold_ = grown->threshold;
-  } else if (!report.failed) {
-    if (grown) {
-      report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
-                        format_number(voxel_size_m_) + " m (the frames' range grew)";
-    }
+    take_back(grown);
+  } else if (grown) {
+    report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
+                      format_number(voxel_size_m_) + " m (the frames' range grew)";
+  }
+  const Eigen::Matrix4d T = finish(report, map_frame, started);
+  if (!report.failed) {
     ranges_m_.push_back(range_m);  // the next frame's range joins these
     if (ranges_m_.size() >= kRangeFrames) ranges_m_.erase(ranges_m_.begin());
   }
-  return finish(report, map_frame, started);
+  return T;
 }
 
+void Odometry::take_back(std::optional<VoxelBefore>& grown) {
+  if (!grown) return;
+  map_ = std::move(grown->map);
+  voxel_size_m_ = grown->voxel_size_m;
+  threshold_ = grown->threshold;
+  grown.reset();
+}
+
+// The map carries what the cost reads of it by construction (add_to_map): a map without it is a
+// bug of ours, not the caller's (ReferenceIndex's own check names an API call the caller never
+// made).
+void Odometry::check_map_surfaces(const ReferenceIndex& index) const {
+  try {
+    check_reference_prepared(index, cost());
+  } catch (const InvalidInputError&) {
+    throw std::logic_error("the odometry map has lost its " +
+                           std::string(needs_covariances(cost()) ? "covariances" : "normals") +
+                           " (" + std::to_string(index.size()) + " points, voxel " +
+                           format_number(voxel_size_m_) + " m)");
+  }
+}
+
+// A repeat of a lost frame is lost as well: its pose is the prediction it was given.
 Eigen::Matrix4d Odometry::repeat_previous_pose(double started_ms) {
   FrameReport report;
-  report.repeated = report.converged = true;
-  report.message = "repeated frame (identical to the previous one): the previous pose";
+  report.repeated = true;
+  report.failed = reports_.back().failed;
+  report.converged = !report.failed;
+  report.message = report.failed
+                       ? "repeated frame (identical to the previous one, which was lost)"
+                       : "repeated frame (identical to the previous one): the previous pose";
   report.T_first_frame = poses_.back();
   const MotionModel motion = motion_;
   const Eigen::Matrix4d T = finish(report, PointCloud{}, started_ms);
@@ -556,6 +614,13 @@ Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame
                                  double started_ms) {
   report.index = poses_.size();
   const Eigen::Matrix4d T = report.T_first_frame;
+  // The map first: it is what can throw (register_frame then fails the frame, and nothing of the
+  // state below has taken it in).
+  if (map_ && !map_frame.empty()) {
+    // A lost frame is not added: its pose is a guess, and the map must stay consistent.
+    if (!report.failed || map_->empty()) add_to_map(map_frame, T);
+    map_->remove_far_from(T.topRightCorner<3, 1>(), settings_.max_range_m);
+  }
   if (!report.failed) {
     // The motion model learns only from two registered frames in a row: across lost frames the
     // motion per frame is unknown, so the next prediction is the pose itself.
@@ -572,11 +637,6 @@ Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame
     }
   } else if (!poses_.empty()) {
     ++lost_since_good_;
-  }
-  if (map_ && !map_frame.empty()) {
-    // A lost frame is not added: its pose is a guess, and the map must stay consistent.
-    if (!report.failed || map_->empty()) add_to_map(map_frame, T);
-    map_->remove_far_from(T.topRightCorner<3, 1>(), settings_.max_range_m);
   }
   poses_.push_back(T);
   report.time_ms = now_ms() - started_ms;

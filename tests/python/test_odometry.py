@@ -94,6 +94,21 @@ def test_an_empty_frame_fails_and_gets_the_prediction():
     assert T4.shape == (4, 4)
 
 
+def test_a_place_paced_back_and_forth_fills_the_map_and_never_raises():
+    """Two views of one place, back and forth, one point per voxel: the map's voxels fill and
+    frames soon add no point. Such a frame used to end the map's normals, and the next one raised
+    InvalidInputError ("needs reference normals"); now every frame registers."""
+    clouds, truth = sequence(2)
+    odometry = sgd_icp.Odometry(max_points_per_voxel=1)
+    sizes = []
+    for k in range(8):
+        odometry.register_frame(clouds[k % 2])
+        assert not odometry.last_report.failed, odometry.last_report.message
+        sizes.append(odometry.map_points)
+    assert sizes[-1] == sizes[-3]  # the last frames added no point
+    np.testing.assert_allclose(odometry.poses[-1][:3, 3], truth[1][:3, 3], atol=0.02)
+
+
 def test_a_frame_of_another_scene_is_lost_counted_and_kept_out_of_the_map():
     clouds, truth = sequence(7)
     odometry = sgd_icp.Odometry()

@@ -6,7 +6,9 @@
 // come from dense tracking and are not exactly orthonormal; KITTI's carry 6-7 digits).
 #include <filesystem>
 #include <optional>
+#include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -27,6 +29,12 @@ struct Trajectory {
 [[nodiscard]] Trajectory read_sevenscenes_poses(const std::filesystem::path& folder);
 /// A folder: 7-Scenes; a file: KITTI (12 numbers on its first data line) or TUM (8 numbers).
 [[nodiscard]] Trajectory read_trajectory(const std::filesystem::path& path);
+
+/// One pose as a KITTI line: 12 numbers (the 3x4 row-major T) with 9 significant digits.
+void write_kitti_pose(std::ostream& out, const Eigen::Matrix4d& T);
+/// The TUM format's header line, and one pose as a TUM line: timestamp tx ty tz qx qy qz qw.
+inline constexpr std::string_view kTumHeader = "# timestamp tx ty tz qx qy qz qw\n";
+void write_tum_pose(std::ostream& out, double timestamp_s, const Eigen::Matrix4d& T);
 
 /// One line per pose, 12 numbers with 9 significant digits (KITTI). Throws IoError.
 void write_kitti_poses(const std::filesystem::path& path,

@@ -178,6 +178,11 @@ constexpr std::string_view enum_noun(FrameStart) {
   return "frame start";
 }
 
+/// How a frame's message starts when an internal error (a bug) failed it.
+inline constexpr std::string_view kInternalError =
+    "internal error (a bug in sgd-icp: please report this message with the command, or the "
+    "calls, and the frame that caused it): ";
+
 /// What happened to one frame.
 struct FrameReport {
   std::size_t index = 0;
@@ -225,8 +230,11 @@ class Odometry {
   [[nodiscard]] const BatchSettings& batch_settings() const noexcept { return batch_; }
 
   /// Registers the next frame (points in its sensor frame) and returns its pose T_first_frame.
-  /// The first frame is the identity. A failed frame is reported (last_report().failed) and
-  /// gets the predicted pose; never throws for a frame's content (an empty frame fails).
+  /// The first frame is the identity. A failed frame is reported (reports().back().failed, with
+  /// the reason in its message) and gets the predicted pose; whatever goes wrong with one frame
+  /// is that frame's failure, and the next frame goes on from the last registered one. An
+  /// internal error (a bug) is reported as such (the message starts with kInternalError). Throws
+  /// only std::bad_alloc (out of memory).
   Eigen::Matrix4d register_frame(const PointCloud& frame);
 
   /// Records a frame that could not be read (a bad file): predicted pose, failed, `message`.
@@ -261,6 +269,19 @@ class Odometry {
   /// returns what it replaced (nothing when it did not grow).
   std::optional<VoxelBefore> grow_voxel(double range_m);
   [[nodiscard]] Eigen::Matrix4d predicted() const;
+  /// register_frame without its guard: may throw.
+  Eigen::Matrix4d register_frame_unguarded(const PointCloud& frame, double started_ms);
+  /// The frame (cropped, its range range_m) thinned on the map's grid and registered to the map
+  /// (the first frame with points starts it); `grown`: what a growth of the grid replaced.
+  Eigen::Matrix4d register_on_grid(const PointCloud& cropped, double range_m,
+                                   std::optional<VoxelBefore>& grown, FrameReport& report,
+                                   double started_ms);
+  /// Records the next frame as lost: the predicted pose, `message`.
+  Eigen::Matrix4d fail_frame(const std::string& message, double started_ms);
+  /// Restores what a voxel growth replaced (nothing when it did not grow).
+  void take_back(std::optional<VoxelBefore>& grown);
+  /// std::logic_error when the map lacks what the cost reads of it (a bug).
+  void check_map_surfaces(const ReferenceIndex& index) const;
   /// A frame identical to the previous one: the previous pose, the motion model kept.
   Eigen::Matrix4d repeat_previous_pose(double started_ms);
   /// The registration step of a frame to the map (d_max 3 sigma when adaptive).
