@@ -230,11 +230,7 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
   m.random_ratio = preprocessing_option(o.random_ratio, "--random-ratio", kRandomRatio, "");
   m.sgd.validate(SettingNames::cli);
   m.batch.validate(SettingNames::cli);
-  if (!m.stochastic && m.sgd.uncertainty.method != UncertaintyType::none) {
-    throw InvalidSettingsError("--uncertainty " + std::string(to_string(m.sgd.uncertainty.method)) +
-                               ": only the SGD methods estimate an uncertainty, not --method " +
-                               m.name);
-  }
+  check_method_uncertainty(method, m.sgd, SettingNames::cli);
   return m;
 }
 

@@ -60,6 +60,23 @@ inline void apply_method_cost(const Method& method, SgdSettings& sgd, BatchSetti
   return out;
 }
 
+/// Throws InvalidSettingsError when `sgd` asks for a pose uncertainty (SgdSettings::uncertainty)
+/// and `method` is a batch one: only the SGD methods estimate one (docs/uncertainty.md). The
+/// setting and the method are spelled as `names` says. The CLI's methods and Odometry check it.
+inline void check_method_uncertainty(const Method& method, const SgdSettings& sgd,
+                                     SettingNames names = SettingNames::field) {
+  const UncertaintyType asked = sgd.uncertainty.method;
+  if (method.solver == Solver::sgd || asked == UncertaintyType::none) return;
+  const std::string value(to_string(asked));
+  const std::string setting = names == SettingNames::cli      ? "--uncertainty " + value
+                              : names == SettingNames::python ? "uncertainty='" + value + "'"
+                                                              : "uncertainty.method " + value;
+  const std::string name(method.name);
+  throw InvalidSettingsError(
+      setting + ": only the SGD methods estimate an uncertainty, not " +
+      (names == SettingNames::cli ? "--method " + name : "method '" + name + "'"));
+}
+
 /// The method of a name ('_' may stand for '-'); InvalidSettingsError for an unknown one.
 [[nodiscard]] inline const Method& method_from_string(std::string_view name) {
   for (const Method& m : kMethods) {
