@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "odometry_support.hpp"
 #include "sgdicp/core/error.hpp"
@@ -534,6 +535,103 @@ TEST(Odometry, AFrameOfAnotherSceneIsLostWithoutPoisoningTheTrack) {
         << i << ": " << odometry.reports().back().message;
     EXPECT_LT(translation_error(odometry.poses().back(), seq.T_world_frame[i]), 0.05) << i;
   }
+}
+
+// A covariance is symmetric positive definite: every eigenvalue above 0, within rounding of
+// its transpose.
+void expect_covariance(const Eigen::Matrix<double, 6, 6>& C, const std::string& what) {
+  ASSERT_TRUE(C.allFinite()) << what << ":\n" << C;
+  EXPECT_LE((C - C.transpose()).cwiseAbs().maxCoeff(), 1e-12 * C.cwiseAbs().maxCoeff()) << what;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(C);
+  EXPECT_GT(eigen.eigenvalues().minCoeff(), 0.0) << what << ":\n" << C;
+}
+
+bool all_nan(const Eigen::Matrix<double, 6, 6>& C) {
+  return C.array().isNaN().all();
+}
+
+SgdSettings with_laplace() {
+  SgdSettings s;
+  s.uncertainty.method = UncertaintyType::laplace;
+  return s;
+}
+
+// With an uncertainty each registered frame carries the covariance of its pose relative to the
+// map (its registration's covariance_se3); the first frame's is zero (it defines the coordinates),
+// a repeated frame keeps the previous one's, and a frame without a registration has NaN.
+TEST(Odometry, EveryRegisteredFrameCarriesTheCovarianceOfItsPose) {
+  const auto seq = test::synthetic_sequence(4, 0.4, 1.0, 12, 6000);
+  Odometry odometry({}, "sgd", with_laplace());
+  odometry.register_frame(seq.frames[0]);
+  odometry.register_frame(seq.frames[1]);
+  odometry.register_frame(seq.frames[1]);  // repeated
+  odometry.register_frame(PointCloud{});   // no point: failed
+  odometry.register_frame(seq.frames[2]);
+  odometry.register_frame(seq.frames[3]);
+  const std::vector<FrameReport>& r = odometry.reports();
+  ASSERT_EQ(r.size(), 6U);
+  EXPECT_TRUE(r[0].covariance.isZero(0.0)) << r[0].covariance;
+  for (const std::size_t i : {1U, 4U, 5U}) {
+    ASSERT_FALSE(r[i].failed) << i << ": " << r[i].message;
+    expect_covariance(r[i].covariance, "frame " + std::to_string(i));
+    // Metres and radians: a frame of 6000 points with 5 mm noise is registered within
+    // millimetres and hundredths of a degree, not a scaled unit's 30 m.
+    const Eigen::Matrix<double, 6, 1> sd = r[i].covariance.diagonal().cwiseSqrt();
+    EXPECT_LT(sd.head<3>().maxCoeff(), 0.01) << i << ": " << sd.transpose();
+    EXPECT_LT(sd.tail<3>().maxCoeff(), 0.1 * kDeg) << i << ": " << sd.transpose();
+  }
+  EXPECT_TRUE(r[2].repeated);
+  EXPECT_TRUE(r[2].covariance == r[1].covariance);
+  EXPECT_TRUE(r[3].failed);
+  EXPECT_TRUE(all_nan(r[3].covariance)) << r[3].covariance;
+  EXPECT_FALSE(r[4].covariance == r[5].covariance);  // each frame its own
+  odometry.skip_frame("unreadable");
+  EXPECT_TRUE(all_nan(odometry.reports().back().covariance));
+}
+
+// Without an uncertainty nothing is estimated: every frame's covariance is NaN, the first too.
+TEST(Odometry, WithoutAnUncertaintyEveryCovarianceIsNaN) {
+  const auto seq = test::synthetic_sequence(3, 0.4, 1.0, 12, 6000);
+  Odometry odometry;
+  for (const auto& f : seq.frames) odometry.register_frame(f);
+  odometry.register_frame(seq.frames[2]);  // repeated
+  for (const FrameReport& r : odometry.reports()) {
+    EXPECT_FALSE(r.failed) << r.index << ": " << r.message;
+    EXPECT_TRUE(all_nan(r.covariance)) << r.index << ":\n" << r.covariance;
+  }
+}
+
+// A frame registered by a retry carries its covariance as well: the global start and the wide
+// basin register with the settings' uncertainty. A batch method has none to give: refused.
+TEST(Odometry, ARecoveredFrameCarriesItsCovarianceAndABatchMethodHasNone) {
+  std::vector<Eigen::Matrix4d> T_world{test::synthetic_start()};
+  for (int f = 1; f < 8; ++f) {
+    const bool jerk = f == 6;  // as AFrameBeyondThePredictionIsRecovered
+    T_world.push_back(T_world.back() * make_transform(0, 0, jerk ? 60.0 * kDeg : 0.0,
+                                                      Eigen::Vector3d(jerk ? -0.5 : 0.5, 0, 0)));
+  }
+  const auto frames = test::synthetic_frames(T_world, 8, 6000);
+  Odometry odometry({}, "sgd", with_laplace());
+  for (const auto& f : frames) odometry.register_frame(f);
+  const FrameReport& jerk = odometry.reports()[6];
+  ASSERT_FALSE(jerk.failed) << jerk.message;
+  EXPECT_TRUE(jerk.recovered) << jerk.message;
+  expect_covariance(jerk.covariance, "frame 6, from the " + std::string(enum_name(jerk.start)));
+  expect_covariance(odometry.reports()[7].covariance, "frame 7");
+
+  try {
+    const Odometry batch({}, "icp-plane", with_laplace());
+    FAIL() << "icp-plane with an uncertainty";
+  } catch (const InvalidSettingsError& e) {
+    EXPECT_NE(std::string(e.what()).find("only the SGD methods estimate an uncertainty"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(Odometry({}, "sgd-plane", [] {
+    SgdSettings s = with_laplace();
+    s.cost = s.coarse_cost = CostType::point_to_plane;
+    return s;
+  }()));
 }
 
 TEST(Odometry, SameSeedSameTrajectory) {

@@ -179,6 +179,8 @@ Odometry::Odometry(const OdometrySettings& settings, std::string_view method,
       sgd_(sgd.value_or(SgdSettings{})),
       batch_(batch.value_or(BatchSettings{})) {
   settings_.validate();
+  // A batch method has no uncertainty to give (the CLI's --method refuses it the same way).
+  check_method_uncertainty(*method_, sgd_);
   // The settings of the method's own solver decide: given, they are checked; not given, the
   // defaults get the method's cost.
   if (method_->solver == Solver::sgd ? sgd.has_value() : batch.has_value()) {
@@ -292,6 +294,7 @@ Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double ran
   const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
+    if (with_uncertainty()) report.covariance.setZero();  // exact: it defines the coordinates
     report.message = poses_.empty() ? "first frame" : "map restarted (no map before)";
     return finish(report, map_frame, started);
   }
@@ -354,6 +357,7 @@ Eigen::Matrix4d Odometry::repeat_previous_pose(double started_ms) {
                        ? "repeated frame (identical to the previous one, which was lost)"
                        : "repeated frame (identical to the previous one): the previous pose";
   report.T_first_frame = poses_.back();
+  report.covariance = reports_.back().covariance;
   const MotionModel motion = motion_;
   const Eigen::Matrix4d T = finish(report, PointCloud{}, started_ms);
   motion_ = motion;  // the motion goes on; the frame says nothing about it
@@ -574,6 +578,8 @@ void Odometry::accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d&
                      std::string(enum_name(start)) + " (" + rejected + ")";
   }
   report.T_first_frame = r.T_reference_source;
+  // The registration's own: of the pose relative to the map, in the frame's tangent space.
+  if (with_uncertainty()) report.covariance = r.covariance_se3;
   // Only registrations from the prediction sample how far it is off: a retry's start was not the
   // prediction.
   if (!report.recovered)
@@ -582,6 +588,10 @@ void Odometry::accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d&
 
 CostType Odometry::cost() const {
   return method_->solver == Solver::sgd ? sgd_.cost : batch_.cost;
+}
+
+bool Odometry::with_uncertainty() const {
+  return method_->solver == Solver::sgd && sgd_.uncertainty.method != UncertaintyType::none;
 }
 
 std::size_t Odometry::threads() const {

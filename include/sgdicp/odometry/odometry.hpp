@@ -19,6 +19,7 @@
 // docs/odometry.md.
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -212,6 +213,15 @@ struct FrameReport {
   double threshold_m = 0.0;     ///< adaptive d_max given (3 sigma), metres; 0 when fixed
   double index_build_ms = 0.0;  ///< KD-tree over the map (plus normals / covariances)
   double time_ms = 0.0;         ///< the whole frame: thinning, index, registration, map update
+  /// With an uncertainty (SgdSettings::uncertainty, an SGD method): the covariance of the frame's
+  /// pose relative to the map it was registered against, the covariance_se3 of the registration
+  /// that gave the pose (result.hpp): translation first, right perturbation T_first_frame =
+  /// T_hat * Exp(xi), xi in the frame's own tangent space, metres and radians. The map's own error
+  /// (the drift of the frames before) is not in it. The frame that starts the map (the first):
+  /// zeros, it defines the coordinates. A repeated frame: the previous frame's. A frame without
+  /// one (lost, unreadable, no point; every frame without an uncertainty): every entry NaN.
+  Eigen::Matrix<double, 6, 6> covariance =
+      Eigen::Matrix<double, 6, 6>::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 class Odometry {
@@ -220,8 +230,11 @@ class Odometry {
   /// Without the settings of the method's solver (`sgd` for the SGD methods, `batch` for the
   /// batch ones), the defaults with the method's cost (apply_method_cost); given, they are
   /// used as they are (their grid aside: the pipeline has its own), so apply the method's cost to
-  /// them before changing what you want (e.g. a coarse cost). Throws InvalidSettingsError for
-  /// invalid settings or method, or settings whose cost is not the method's.
+  /// them before changing what you want (e.g. a coarse cost). An uncertainty in `sgd`
+  /// (SgdSettings::uncertainty) gives every frame its covariance (FrameReport::covariance); none,
+  /// nothing is computed for it. Throws InvalidSettingsError for invalid settings or method,
+  /// settings whose cost is not the method's, or an uncertainty with a batch method
+  /// (check_method_uncertainty).
   explicit Odometry(const OdometrySettings& settings = {}, std::string_view method = "sgd",
                     std::optional<SgdSettings> sgd = std::nullopt,
                     std::optional<BatchSettings> batch = std::nullopt);
@@ -324,6 +337,8 @@ class Odometry {
   [[nodiscard]] const NeighborhoodSettings& neighborhood() const;
   // The registration's thread count: every step of a frame runs on it (--threads).
   [[nodiscard]] std::size_t threads() const;
+  // The registrations estimate a pose uncertainty (an SGD method with SgdSettings::uncertainty).
+  [[nodiscard]] bool with_uncertainty() const;
 
   OdometrySettings settings_;
   const Method* method_;
