@@ -33,6 +33,7 @@ struct OdometryOptions {
   std::string ground_truth_calib;
   std::string picture;
   std::string report;
+  std::string covariances_out;
   std::string map_out;
   double map_voxel_m = 0.0;
   bool ground_truth_prefix = false;
@@ -91,6 +92,24 @@ void write_report_row(std::ostream& out, const FrameSource& source, const FrameR
       << ',' << r.time_ms << ",\"" << message << "\"\n";
 }
 
+// The frame's covariance: its 36 numbers row-major on one line, NaN as `nan` (whatever its sign).
+void write_covariance_row(std::ostream& out, const Eigen::Matrix<double, 6, 6>& covariance) {
+  const std::streamsize precision = out.precision(9);
+  for (int r = 0; r < 6; ++r) {
+    for (int c = 0; c < 6; ++c) {
+      out << (r || c ? " " : "");
+      const double v = covariance(r, c);
+      if (std::isnan(v)) {
+        out << "nan";
+      } else {
+        out << v + 0.0;  // -0 prints as 0
+      }
+    }
+  }
+  out << '\n';
+  out.precision(precision);
+}
+
 // The per-frame files, written as the run goes: a frame's lines are on disk (flushed) before the
 // next frame is read, so a run stopped by an error, a signal or a crash keeps every pose it had.
 // Opened with the first frame's lines: an unwritable name fails after one frame, not after a long
@@ -106,6 +125,7 @@ class FrameWriters {
       open(poses_, o_.poses_out);
       if (!o_.tum.empty()) open(tum_, o_.tum) << kTumHeader;
       if (!o_.report.empty()) open(report_, o_.report) << kReportHeader;
+      if (!o_.covariances_out.empty()) open(covariances_, o_.covariances_out);
     }
     const FrameReport& r = odometry.reports().back();
     write_kitti_pose(poses_, r.T_first_frame);
@@ -117,6 +137,10 @@ class FrameWriters {
     if (report_.is_open()) {
       write_report_row(report_, source, r);
       check(report_.flush(), o_.report);
+    }
+    if (covariances_.is_open()) {
+      write_covariance_row(covariances_, r.covariance);
+      check(covariances_.flush(), o_.covariances_out);
     }
   }
 
@@ -132,7 +156,7 @@ class FrameWriters {
 
   const OdometryOptions& o_;
   std::vector<double> timestamps_s_;
-  std::ofstream poses_, tum_, report_;
+  std::ofstream poses_, tum_, report_, covariances_;
 };
 
 // The timestamps of the first `frames` frames, or nothing when the source does not give them.
@@ -377,6 +401,7 @@ void print_run_summary(const OdometryOptions& o, const std::string& method,
             << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
             << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
             << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum)
+            << (o.covariances_out.empty() ? "" : ", covariances: " + o.covariances_out)
             << (o.map_out.empty() ? "" : ", map: " + o.map_out) << '\n';
 }
 
@@ -399,6 +424,9 @@ void evaluate_and_draw(const OdometryOptions& o, const std::vector<Eigen::Matrix
 void run(const OdometryOptions& o) {
   const MethodSpec method = make_method(o.settings.method, o.settings);
   const OdometrySettings settings = odometry_settings(o);
+  if (!o.covariances_out.empty() && method.sgd.uncertainty.method == UncertaintyType::none) {
+    throw InvalidSettingsError("--covariances-out needs --uncertainty laplace, sgld or svgd");
+  }
   if (!o.picture.empty()) check_picture_name(o.picture);
   check_map_options(o);
   if (!(o.rate_hz >= 0.0 && std::isfinite(o.rate_hz))) {
@@ -492,6 +520,9 @@ void add_odometry_command(CLI::App& app) {
   cmd->add_option("--report", o->report,
                   "Write one CSV row per frame (failed, recovered, start, converged, iterations, "
                   "points, overlap, inliers, threshold, times, message)");
+  cmd->add_option("--covariances-out", o->covariances_out,
+                  "Write each frame's pose covariance relative to the map (m, rad): one line of "
+                  "36 numbers, 6x6 row-major, nan for none; needs --uncertainty");
   cmd->add_option("--map-out", o->map_out,
                   "Write the local map at the end, or when a signal stops the run (the first "
                   "frame's coordinates, metres): PLY, PCD or XYZ by the extension");

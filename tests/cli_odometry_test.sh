@@ -39,6 +39,34 @@ else
   fail "odometry summary: $(head -c 400 "$tmp/out") / $(head -c 200 "$tmp/err")"
 fi
 
+# --covariances-out: one line of 36 numbers per frame, the first all zeros (it defines the
+# coordinates), every other a registration's (no nan, positive variances). Each frame lacks another
+# point of the cloud, so that none repeats the one before (a repeat keeps the previous covariance).
+cov="$tmp/cov"
+mkdir -p "$cov"
+for i in 0 1 2 3; do sed "$((i + 2))d" "$DEMO/car_cloud400.csv" >"$cov/frame_$i.csv"; done
+run odometry "$cov" --poses-out "$tmp/c.txt" --uncertainty laplace --covariances-out "$tmp/c.cov"
+if [ "$rc" -eq 0 ] && [ "$(grep -c . "$tmp/c.cov")" -eq 4 ] &&
+  awk 'NF != 36 { bad = 1 }
+       NR == 1 { for (i = 1; i <= NF; i++) if ($i != "0") bad = 1 }
+       NR > 1 { for (i = 1; i <= NF; i++) if ($i == "nan") bad = 1
+                for (i = 1; i <= 36; i += 7) if (!($i > 0)) bad = 1 }
+       END { exit bad }' "$tmp/c.cov"; then
+  pass "odometry --covariances-out: one line of 36 numbers per frame, the first all zeros"
+else
+  fail "odometry --covariances-out (exit $rc): $(head -c 400 "$tmp/err") $(head -c 600 "$tmp/c.cov")"
+fi
+rm -f "$tmp/n.txt" "$tmp/n.cov"
+expect_error "odometry --covariances-out without --uncertainty" \
+  'covariances-out needs --uncertainty laplace, sgld or svgd' \
+  odometry "$cov" --poses-out "$tmp/n.txt" --covariances-out "$tmp/n.cov"
+[ ! -e "$tmp/n.txt" ] && [ ! -e "$tmp/n.cov" ] &&
+  pass "odometry --covariances-out without --uncertainty: refused before anything is written" ||
+  fail "odometry --covariances-out without --uncertainty wrote a file"
+expect_error "odometry --uncertainty with a batch method" \
+  'only the SGD methods estimate an uncertainty, not --method icp' \
+  odometry "$cov" --poses-out "$tmp/n.txt" --method icp --uncertainty laplace
+
 # A bad file in the middle: reported, the predicted pose used, the run goes on.
 printf 'x y z\n1 2\n' >"$seq/frame_2.csv"
 run odometry "$seq" --poses-out "$tmp/p2.txt" --report "$tmp/r2.csv"
