@@ -1737,6 +1737,15 @@ class FrameReport:
     @property
     def time_ms(self) -> float:
         """The whole frame (thinning, index, registration, map update), milliseconds."""
+    @property
+    def covariance(self) -> npt.NDArray[np.float64]:
+        """(6, 6) float64 covariance of the frame's pose relative to the map it was registered
+        against (uncertainty='laplace', 'sgld' or 'svgd'): the registration's covariance_se3,
+        translation first, xi in the frame's own tangent space (T_first_frame = T_hat @ Exp(xi)),
+        metres and radians; the map's own error is not in it. The first frame: zeros; a repeated
+        frame: the previous frame's; a frame without one (lost, no point, or no uncertainty
+        asked): NaN.
+        """
 
 
 class Odometry:

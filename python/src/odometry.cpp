@@ -113,6 +113,22 @@ void bind_odometry(py::module_& m) {
                     "KD-tree build over the map (plus normals or covariances), milliseconds.")
       .def_readonly("time_ms", &FrameReport::time_ms,
                     "The whole frame (thinning, index, registration, map update), milliseconds.")
+      .def_property_readonly(
+          "covariance",
+          [](const FrameReport& r) {
+            py::array_t<double> out({py::ssize_t{6}, py::ssize_t{6}});
+            auto a = out.mutable_unchecked<2>();
+            for (py::ssize_t i = 0; i < 6; ++i) {
+              for (py::ssize_t j = 0; j < 6; ++j) a(i, j) = r.covariance(i, j);
+            }
+            return out;
+          },
+          "(6, 6) float64 covariance of the frame's pose relative to the map it was registered "
+          "against (uncertainty='laplace', 'sgld' or 'svgd'): the registration's covariance_se3, "
+          "translation first, xi in the frame's own tangent space (T_first_frame = T_hat @ "
+          "Exp(xi)), metres and radians; the map's own error is not in it. The first frame: "
+          "zeros; a repeated frame: the previous frame's; a frame without one (lost, no "
+          "point, or no uncertainty asked): NaN.")
       .def("__repr__", [](const FrameReport& r) {
         return "<sgd_icp.FrameReport " + std::to_string(r.index) + (r.failed ? " FAILED: " : ": ") +
                r.message + ">";

@@ -167,6 +167,36 @@ def test_keywords_are_the_cli_options():
         sgd_icp.Odometry(downsample_to=5000)
 
 
+def test_each_frame_carries_the_covariance_of_its_pose():
+    """uncertainty= gives every registered frame the (6, 6) covariance of its pose relative to the
+    map: zeros for the first, NaN for a frame without one; without it, NaN everywhere."""
+    clouds, _ = sequence(4)
+    odometry = sgd_icp.Odometry(uncertainty="laplace")
+    for cloud in clouds:
+        odometry.register_frame(cloud)
+    odometry.register_frame(np.zeros((0, 3)))
+    reports = odometry.reports
+    first = reports[0].covariance
+    assert first.shape == (6, 6) and first.dtype == np.float64
+    assert (first == 0).all()
+    for report in reports[1:4]:
+        assert not report.failed, report.message
+        c = report.covariance
+        assert c.shape == (6, 6) and np.isfinite(c).all()
+        np.testing.assert_allclose(c, c.T, rtol=1e-12, atol=0)
+        assert np.linalg.eigvalsh(c).min() > 0
+        assert np.sqrt(c[0, 0]) < 0.01  # metres: millimetres for 8000 points with 5 mm noise
+    assert reports[4].failed and np.isnan(reports[4].covariance).all()
+
+    plain = sgd_icp.Odometry()
+    for cloud in clouds[:2]:
+        plain.register_frame(cloud)
+    assert all(r.covariance.shape == (6, 6) and np.isnan(r.covariance).all() for r in plain.reports)
+    # A batch method estimates none: its keyword is refused.
+    with pytest.raises(TypeError, match="SGD methods only"):
+        sgd_icp.Odometry(method="icp", uncertainty="laplace")
+
+
 def test_a_fixed_max_distance_turns_the_adaptive_threshold_off():
     clouds, _ = sequence(3)
     fixed = sgd_icp.Odometry(max_distance=0.5, max_distance_unit="m")
