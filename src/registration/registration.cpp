@@ -81,6 +81,30 @@ class MiniBatchPairing {
              settings_.trim_ratio >= 1.0;
   }
 
+  // sum w J^T Omega e of the cost over every point of `cloud` (a source in the run's frame, e.g.
+  // thinned on another grid), each paired by a fresh search of the reference within d_max. A cloud
+  // without covariances pairs plane-to-plane by the reference normal alone.
+  PoseVector gradient_over(const PointCloud& cloud, const EulerPoseJacobian& pose,
+                           double d_max_scaled) {
+    CostAccumulator cost(settings_.kernel, kernel_scale_, false);
+    const double k = scaling_.scale();
+    const auto d_max_sq_m = static_cast<float>(d_max_scaled * k * d_max_scaled * k);
+    for (const Eigen::Vector3f& p : cloud.points) {
+      const Eigen::Vector3d s = scaling_.to_scaled(p);
+      const Eigen::Vector3d moved = pose.transform(s);
+      const auto nn = reference_.nearest(scaling_.to_metric(moved).cast<float>(), d_max_sq_m);
+      if (!nn) continue;
+      const Eigen::Vector3d r = scaling_.to_scaled(reference_.cloud().points[nn->index]);
+      if (cost_ == CostType::point_to_point) {
+        cost.add_point_to_point(pose.jacobian(s), moved - r);
+      } else {
+        cost.add_plane(pose.jacobian(s), moved - r,
+                       reference_surfaces_.normal(nn->index).cast<double>());
+      }
+    }
+    return 2.0 * cost.gradient(1);
+  }
+
   // The cost of the batch at `pose` over the pairs within d_max_scaled; their distances (scaled)
   // are appended to `distances`.
   CostAccumulator accumulate(const std::vector<std::uint32_t>& batch, const EulerPoseJacobian& pose,
@@ -347,6 +371,13 @@ class SgdRun {
     optimizer_ = Optimizer(with_gauss_newton_steps(settings_.optimizer));
   }
 
+  // The gradient of the run's final cost over every point of another source cloud at theta (the
+  // uncertainty's grid bootstrap).
+  PoseVector gradient_over(const PointCloud& cloud, const PoseVector& theta) {
+    pairing_.use_cost(settings_.cost);
+    return pairing_.gradient_over(cloud, EulerPoseJacobian(theta), schedule_.max_distance());
+  }
+
   // The normal of reference point i, from the cloud or estimated once (as the plane costs do).
   [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
     return pairing_.reference_normal(i);
@@ -467,7 +498,13 @@ std::optional<RegistrationResult> detail::align_unless(const PointCloud& source,
         run_settings.sampling.batch_size,
         settings.sampling.seed,
         theta_init,
-        settings.pairing.trim_ratio >= 1.0};
+        settings.pairing.trim_ratio >= 1.0,
+        [&run](const PointCloud& cloud, const PoseVector& th) {
+          return run.gradient_over(cloud, th);
+        },
+        voxel_m > 0.0 ? &source : nullptr,
+        voxel_m,
+        frame.origin_m()};
     theta = estimate_uncertainty(problem, settings.uncertainty, theta, result);
   }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));

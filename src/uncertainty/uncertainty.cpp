@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/solver/optimizer.hpp"
 #include "sgdicp/solver/sampler.hpp"
 #include "surfaces/point_surfaces.hpp"
@@ -57,7 +58,9 @@ namespace {
 
 // The source indices grouped into cubic blocks of side block_m, in a fixed order (sorted keys),
 // so that sums over blocks do not depend on a hash table's order.
-std::vector<std::vector<std::uint32_t>> blocks_of(const PointCloud& source, double block_m) {
+using Blocks = std::vector<std::vector<std::uint32_t>>;
+
+Blocks blocks_of(const PointCloud& source, double block_m) {
   using Key = std::tuple<long long, long long, long long, std::uint32_t>;
   std::vector<Key> keys;
   keys.reserve(source.size());
@@ -110,13 +113,14 @@ CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std:
   return cost;
 }
 
-FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
-                   const PoseVector& theta) {
+// With `surface` (point-to-point only), the pairs' surface information n n^T; else the run's own
+// cost, whose gradient the run drives to zero.
+FullPass full_pass(const UncertaintyProblem& p, const Blocks& blocks, const PoseVector& theta,
+                   bool surface) {
   FullPass out;
-  const bool surface = p.cost == CostType::point_to_point && p.reference != nullptr;
   std::optional<detail::PointSurfaces> surfaces;
   if (surface) surfaces.emplace(*p.reference, NeighborhoodSettings{.k = kSurfaceNeighbors});
-  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+  for (const auto& block : blocks) {
     const CostAccumulator c =
         surface ? surface_cost(p, block, theta, *surfaces) : p.batch_cost(block, theta, true);
     if (c.pairs() == 0) continue;
@@ -132,13 +136,21 @@ FullPass full_pass(const UncertaintyProblem& p, const UncertaintySettings& s,
 }
 
 // sum w J^T Omega e over every source point with the run's own pairing and cost.
-PoseVector run_cost_gradient(const UncertaintyProblem& p, const UncertaintySettings& s,
+PoseVector run_cost_gradient(const UncertaintyProblem& p, const Blocks& blocks,
                              const PoseVector& theta) {
   PoseVector sum = PoseVector::Zero();
-  for (const auto& block : blocks_of(*p.source, s.block_size.to_metres(p.scale_m))) {
+  for (const auto& block : blocks) {
     sum += 2.0 * p.batch_cost(block, theta, false).gradient(1);
   }
   return sum;
+}
+
+bool uses_surface_information(const UncertaintyProblem& p) {
+  return p.cost == CostType::point_to_point && p.reference != nullptr;
+}
+
+FullPass full_pass(const UncertaintyProblem& p, const Blocks& blocks, const PoseVector& theta) {
+  return full_pass(p, blocks, theta, uses_surface_information(p));
 }
 
 PoseVector prior_information() {
@@ -160,6 +172,138 @@ double correlation_factor(const FullPass& f, double sigma2) {
   h.diagonal() += sigma2 * prior_information();  // bounded in unconstrained directions
   const double kappa = h.ldlt().solve(s).trace() / (6.0 * sigma2);
   return std::isfinite(kappa) ? std::max(1.0, kappa) : 1.0;
+}
+
+// dG/dtheta by central differences of the full-data gradient G of the run's own cost, its pairs
+// found anew at every pose (run_cost_gradient), `steps` apart along each axis: the curvature of
+// the objective the run actually minimises. Where nearest neighbours change as the pose moves
+// (noisy points as dense as the noise, centroids of voxels that cut a noisy surface), it is far
+// flatter than the Gauss-Newton matrix of pairs held fixed, and the error of the optimum that
+// much larger (docs/uncertainty.md, *Curvature of the re-paired objective*).
+PoseMatrix secant_curvature(const UncertaintyProblem& p, const Blocks& blocks,
+                            const PoseVector& theta, const PoseVector& steps) {
+  PoseMatrix a;
+  for (int k = 0; k < 6; ++k) {
+    PoseVector up = theta, down = theta;
+    up[k] += steps[k];
+    down[k] -= steps[k];
+    a.col(k) =
+        (run_cost_gradient(p, blocks, up) - run_cost_gradient(p, blocks, down)) / (2.0 * steps[k]);
+  }
+  return 0.5 * (a + a.transpose());
+}
+
+// `a` with its eigenvalues in the metric of `metric` (the Gauss-Newton matrix of the pairs held
+// fixed) kept within [kMinSoftening, 1]: re-pairing softens that curvature, it does not stiffen
+// it; a secant across a few pairing jumps can come out flat, crooked or not positive.
+PoseMatrix bounded_curvature(const PoseMatrix& a, const PoseMatrix& metric) {
+  const Eigen::LLT<PoseMatrix> llt(metric);
+  const PoseMatrix l = llt.matrixL();
+  const PoseMatrix l_inverse = l.inverse();
+  PoseMatrix m = l_inverse * a * l_inverse.transpose();
+  m = 0.5 * (m + m.transpose()).eval();
+  const Eigen::SelfAdjointEigenSolver<PoseMatrix> eigen(m);
+  const PoseVector w = eigen.eigenvalues().cwiseMax(kMinSoftening).cwiseMin(1.0);
+  return l * eigen.eigenvectors() * w.asDiagonal() * eigen.eigenvectors().transpose() *
+         l.transpose();
+}
+
+// The block sandwich of the run's own estimating equation G(theta) = 0: A^-1 S A^-1, A the
+// secant curvature, S the covariance of G from its block sums (B / (B - 6) sum g_b g_b^T; the
+// independent-residual sigma^2 H when there are too few blocks to measure it).
+PoseMatrix sandwich_of(const PoseMatrix& a_inverse, const FullPass& own, double sigma2) {
+  const auto b = static_cast<double>(own.paired_blocks);
+  const PoseMatrix meat =
+      b > 6.0 ? PoseMatrix(own.blocks * (b / (b - 6.0))) : PoseMatrix(sigma2 * own.jtj);
+  PoseMatrix cov = a_inverse * meat * a_inverse.transpose();
+  return 0.5 * (cov + cov.transpose());
+}
+
+// The secant's steps: at most half the final d_max (a rotation: half of it at half the scaled
+// cloud's unit radius), where the pairs the run keeps still exist.
+PoseVector secant_steps(PoseVector steps, const UncertaintyProblem& p) {
+  const double cap = kMaxSecantStep * p.max_distance;
+  steps.head<3>() = steps.head<3>().cwiseMin(cap);
+  steps.tail<3>() = steps.tail<3>().cwiseMin(2.0 * cap);
+  return steps.cwiseMax(1e-12);
+}
+
+struct SandwichEstimate {
+  PoseVector theta;       // scaled: the optimum of the re-paired objective
+  PoseMatrix covariance;  // scaled theta
+  PoseMatrix a_inverse;   // the inverse secant curvature (with the prior) at theta
+};
+
+// The covariance of the optimum of the re-paired objective, and that optimum: a secant at
+// kSecantFirstStep standard deviations of the tempered Laplace covariance `laplace` (about the
+// scale of the error it describes), and a Newton step with it towards the optimum: the fixed
+// pairs' Gauss-Newton steps under-step there by the softening. A second secant at the scale of
+// the first estimate changed no figure of the calibration beyond its trial-to-trial spread
+// (docs/uncertainty.md), for 12 more passes over the source.
+SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& blocks,
+                                   PoseVector theta, const FullPass& full, double sigma2,
+                                   const PoseMatrix& laplace) {
+  PoseMatrix metric = full.jtj;
+  metric.diagonal() += sigma2 * prior_information();
+  const PoseMatrix prior = (sigma2 * prior_information()).asDiagonal();
+  FullPass own = uses_surface_information(p) ? full_pass(p, blocks, theta, false) : full;
+  const PoseVector steps = secant_steps(kSecantFirstStep * laplace.diagonal().cwiseSqrt(), p);
+  const PoseMatrix a = bounded_curvature(secant_curvature(p, blocks, theta, steps), metric) + prior;
+  const PoseMatrix a_inverse = a.inverse();
+  PoseMatrix cov = sandwich_of(a_inverse, own, sigma2);
+  // Newton's step on G, within the box the secant probed (a flat secant would send it far off
+  // on a sparse cloud), taken when the pairs' mean cost does not grow and they stay.
+  PoseVector step = a_inverse * own.jte;
+  step *= std::min(1.0, (steps.array() / step.array().abs()).minCoeff());
+  const FullPass moved = full_pass(p, blocks, theta - step, false);
+  if (step.allFinite() && moved.pairs >= own.pairs - own.pairs / 20 &&
+      moved.sum_rho / static_cast<double>(std::max<std::size_t>(moved.pairs, 1)) <=
+          own.sum_rho / static_cast<double>(std::max<std::size_t>(own.pairs, 1))) {
+    theta -= step;
+    own = moved;
+    cov = sandwich_of(a_inverse, own, sigma2);
+  }
+  return {theta, cov, a_inverse};
+}
+
+// The source thinned on its grid shifted by `offset` (metres), in the pair's frame.
+PointCloud thinned_on_shifted_grid(const UncertaintyProblem& p, const Eigen::Vector3d& offset) {
+  PointCloud shifted = *p.unthinned_source;
+  const Eigen::Vector3f o = offset.cast<float>();
+  for (Eigen::Vector3f& q : shifted.points) q -= o;
+  PointCloud out = voxel_downsample(shifted, p.voxel_m);
+  for (Eigen::Vector3f& q : out.points) q += o;
+  return out.origin_m == p.frame_origin_m ? out : rebased(out, p.frame_origin_m);
+}
+
+// The grid bootstrap: a voxel's centroid of a noisy surface is pulled off it wherever the voxel
+// cuts the noise's thickness, the same way along a whole wall that lies along the grid, and
+// differently in the source's grid and the reference's. That error is coherent, the residuals do
+// not show it, and on dense clouds as noisy as a tenth of a voxel it is most of the pose's error
+// (the 7-Scenes frame at 1 cm: 15 mm in single problems against a sandwich of 0.5 mm;
+// docs/uncertainty.md, *The grid's own error*). Thinning the source on kGridOffsets grids shifted
+// at random, each one's optimum is a Newton step away, -A^-1 G_k; the covariance of those optima
+// (the actual grid's among them) is the grid's share of the error.
+PoseMatrix grid_covariance(const UncertaintyProblem& p, const PoseVector& theta,
+                           const PoseMatrix& a_inverse) {
+  if (p.unthinned_source == nullptr || !(p.voxel_m > 0.0) || !p.cloud_gradient) {
+    return PoseMatrix::Zero();
+  }
+  std::mt19937_64 engine(p.seed ^ 0x5851f42d4c957f2dULL);
+  const auto uniform = [&engine] { return static_cast<double>(engine() >> 11) * 0x1.0p-53; };
+  std::vector<PoseVector> optima{PoseVector::Zero()};
+  for (int k = 0; k < kGridOffsets; ++k) {
+    const Eigen::Vector3d offset = p.voxel_m * Eigen::Vector3d(uniform(), uniform(), uniform());
+    const PoseVector g = p.cloud_gradient(thinned_on_shifted_grid(p, offset), theta);
+    if (g.allFinite()) optima.push_back(-(a_inverse * g));
+  }
+  if (optima.size() < 2) return PoseMatrix::Zero();
+  PoseVector mean = PoseVector::Zero();
+  for (const PoseVector& d : optima) mean += d;
+  mean /= static_cast<double>(optima.size());
+  PoseMatrix cov = PoseMatrix::Zero();
+  for (const PoseVector& d : optima) cov += (d - mean) * (d - mean).transpose();
+  return cov / static_cast<double>(optima.size() - 1);
 }
 
 // Normal deviates from a fully specified engine and Box-Muller, so that a seed gives the same
@@ -471,12 +615,13 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
   // SGD stops within the noise ball of its mini-batch gradient, which is wider than the
   // posterior: Gauss-Newton steps on every pair bring the estimate to the full-data optimum
   // that the covariance describes (measured: docs/uncertainty.md).
-  FullPass full = full_pass(p, s, theta_hat);
+  const Blocks blocks = blocks_of(*p.source, s.block_size.to_metres(p.scale_m));
+  FullPass full = full_pass(p, blocks, theta_hat);
   for (int step = 0; step < kPolishSteps && full.pairs > 6; ++step) {
     PoseMatrix h = full.jtj;
     h.diagonal() += 1e-9 * h.trace() * PoseVector::Ones() + 1e-12 * prior_information();
     theta_hat -= h.ldlt().solve(full.jte);
-    full = full_pass(p, s, theta_hat);
+    full = full_pass(p, blocks, theta_hat);
   }
   result.uncertainty_pairs = full.pairs;
   const auto residuals = static_cast<double>(full.pairs * residuals_per_pair(p.cost));
@@ -494,8 +639,13 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
   Posterior post{theta_hat, full.jte, 1.0 / (sigma2 * tau), full.jtj / (sigma2 * tau)};
   post.precision.diagonal() += prior_information();
   if (s.method == UncertaintyType::laplace) {
+    PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
+    if (s.temper) {
+      const SandwichEstimate sandwich = sandwich_estimate(p, blocks, theta_hat, full, sigma2, cov);
+      theta_hat = sandwich.theta;
+      cov = sandwich.covariance + grid_covariance(p, theta_hat, sandwich.a_inverse);
+    }
     const PoseMatrix jm = pose_map_jacobian(p.to_reported, theta_hat);
-    const PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
     result.covariance = jm * cov * jm.transpose();
   } else {
     const OptimumGradients at_hat(p, theta_hat);
@@ -504,7 +654,7 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
     if (const auto full_gradient = at_hat.full()) {
       post.jte_hat = *full_gradient;
     } else if (p.cost == CostType::point_to_point) {
-      post.jte_hat = run_cost_gradient(p, s, theta_hat);
+      post.jte_hat = run_cost_gradient(p, blocks, theta_hat);
     }
     const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
     if (s.method == UncertaintyType::sgld) {
@@ -515,7 +665,7 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
     }
   }
   result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
-  const PoseMatrix js = se3_jacobian(reported_hat);
+  const PoseMatrix js = se3_jacobian(p.to_reported(theta_hat));
   result.covariance_se3 = js * result.covariance * js.transpose();
   result.uncertainty_ms = clock.elapsed_ms();
   return theta_hat;

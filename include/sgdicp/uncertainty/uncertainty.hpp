@@ -116,6 +116,13 @@ struct UncertaintyProblem {
   /// The batch cost is a sum over its points (no trimming): the control variate's gradients at
   /// the optimum are then paired once per point, not once per mini-batch.
   bool additive_batches = true;
+  /// The grid bootstrap (laplace): the gradient of the run's cost over every point of another
+  /// thinning of the source, at a scaled pose; the source as given (before thinning), the voxel
+  /// side it was thinned with (0 = not thinned: no bootstrap) and the origin of the pair's frame.
+  std::function<PoseVector(const PointCloud& cloud, const PoseVector& theta)> cloud_gradient;
+  const PointCloud* unthinned_source = nullptr;
+  double voxel_m = 0.0;
+  Eigen::Vector3d frame_origin_m = Eigen::Vector3d::Zero();
 };
 
 /// Fills covariance, covariance_se3 (sgld, svgd: samples, sample_mean; svgd: modes) of `result` for
@@ -158,6 +165,16 @@ inline constexpr double kModeLinkBandwidth = 0.25;
 inline constexpr double kSvgdBandwidthScale = 4.0;
 /// svgd: Adam's first step as a fraction of the initial spread.
 inline constexpr double kSvgdFirstStep = 0.2;
+
+/// laplace: the secant's steps, in standard deviations of the tempered Laplace covariance; the
+/// least softening of the fixed pairs' curvature
+/// the secant may report (in that curvature's metric); the largest secant step, a fraction of the
+/// final d_max (docs/uncertainty.md).
+inline constexpr double kSecantFirstStep = 3.0;
+inline constexpr double kMinSoftening = 0.1;
+inline constexpr double kMaxSecantStep = 0.5;
+/// laplace: the source thinned on this many grids shifted at random (the grid bootstrap).
+inline constexpr int kGridOffsets = 6;
 
 /// Gauss-Newton steps over every pair before the covariance (measured: 2 reach the optimum).
 inline constexpr int kPolishSteps = 2;
