@@ -208,15 +208,16 @@ TEST(VoxelHash, RealScansEqualTree) {
 }
 
 // The odometry map grows and shrinks its index in place. A plain model of its rule (a cell of
-// 2x2x2 voxels per std::map entry; a point enters while its voxel holds fewer than the bound; a
-// cell goes when its first point lies beyond the radius) says which points it must hold after
+// 2x2x2 voxels per std::map entry; a point enters while its voxel holds fewer than the bound and
+// none of its points lies within voxel / sqrt(bound) of it; a cell goes when its first point lies
+// beyond the radius) says which points it must hold after
 // each frame; its index must answer as a tree built afresh over them, and every point's normal
 // must still be its own after the gaps of evicted cells were filled.
 namespace map_model {
 using Key = std::array<std::int64_t, 3>;
 struct Cell {
   std::vector<Eigen::Vector3f> points;
-  std::map<Key, std::size_t> per_voxel;
+  std::map<Key, std::vector<Eigen::Vector3f>> per_voxel;
 };
 Key floor_key(const Eigen::Vector3f& p, double size_m) {
   return {static_cast<std::int64_t>(std::floor(static_cast<double>(p.x()) / size_m)),
@@ -276,6 +277,8 @@ TEST(VoxelHash, AMapGrownAndEvictedInPlaceHoldsThePointsOfItsRuleAndAnswersAsATr
   constexpr double kVoxel = 0.25;
   constexpr std::size_t kBound = 3;
   constexpr double kRadius = 4.0;
+  const double spacing_m = kVoxel / std::sqrt(static_cast<double>(kBound));
+  const auto kSpacingSq = static_cast<float>(spacing_m * spacing_m);
   std::mt19937_64 rng(7);
   VoxelMap map(kVoxel, kBound);
   std::map<Key, Cell> model;
@@ -288,9 +291,12 @@ TEST(VoxelHash, AMapGrownAndEvictedInPlaceHoldsThePointsOfItsRuleAndAnswersAsATr
     map.add(c);
     for (const auto& p : c.points) {
       Cell& cell = model[floor_key(p, 2.0 * kVoxel)];
-      std::size_t& held = cell.per_voxel[floor_key(p, kVoxel)];
-      if (held < kBound) {
-        ++held;
+      std::vector<Eigen::Vector3f>& held = cell.per_voxel[floor_key(p, kVoxel)];
+      const bool spaced = std::none_of(held.begin(), held.end(), [&](const Eigen::Vector3f& h) {
+        return (h - p).squaredNorm() < kSpacingSq;
+      });
+      if (held.size() < kBound && spaced) {
+        held.push_back(p);
         cell.points.push_back(p);
       }
     }

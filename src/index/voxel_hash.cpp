@@ -22,7 +22,14 @@ float largest_coordinate_of(const PointCloud& cloud) {
 }  // namespace
 
 VoxelHash::VoxelHash(double cell_m, std::size_t max_points_per_voxel)
-    : cell_m_(cell_m), inverse_cell_(1.0 / cell_m), max_points_(max_points_per_voxel) {
+    : cell_m_(cell_m),
+      inverse_cell_(1.0 / cell_m),
+      max_points_(max_points_per_voxel),
+      // KISS-ICP's rule: N points of a voxel of side v spread over its surface at ~v / sqrt(N).
+      spacing_m_(max_points_per_voxel == kUnbounded || max_points_per_voxel == 0
+                     ? 0.0
+                     : 0.5 * cell_m / std::sqrt(static_cast<double>(max_points_per_voxel))),
+      spacing_sq_(static_cast<float>(spacing_m_ * spacing_m_)) {
   if (!std::isfinite(cell_m) || cell_m <= 0.0) {
     throw InvalidSettingsError("voxel hash: cell size must be positive and finite, got " +
                                format_number(cell_m) + " m");
@@ -36,8 +43,11 @@ std::vector<std::uint32_t> VoxelHash::admitted(const PointCloud& cloud) const {
   std::vector<std::uint32_t> out;
   out.reserve(cloud.size());
   const VoxelGrid grid(0.5 * cell_m_, largest_coordinate_of(cloud));
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   KeySlots mine;  // the voxels this cloud fills, and how far (in `added`)
   std::vector<std::uint32_t> added;
+  std::vector<std::uint32_t> latest;    // by voxel of `mine`: its last admitted point (in out)
+  std::vector<std::uint32_t> previous;  // by point of out: the one admitted before it in its voxel
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points[i];
     if (!p.allFinite()) continue;
@@ -50,17 +60,26 @@ std::vector<std::uint32_t> VoxelHash::admitted(const PointCloud& cloud) const {
         at = static_cast<std::uint32_t>(added.size());
         mine.insert(voxel, at);
         added.push_back(0);
+        latest.push_back(kNone);
       }
       if (held + added[at] >= max_points_) continue;
+      if (held > 0 && crowded(cells_[cell], octant(voxel), p)) continue;
+      bool near = false;
+      for (std::uint32_t j = latest[at]; j != kNone && !near; j = previous[j]) {
+        near = too_close(cloud.points[out[j]], p);
+      }
+      if (near) continue;
       ++added[at];
+      previous.push_back(latest[at]);
+      latest[at] = static_cast<std::uint32_t>(out.size());
     }
     out.push_back(static_cast<std::uint32_t>(i));
   }
   return out;
 }
 
-// One pass: a point is admitted by the counts as they stand, which already hold the points of
-// `cloud` added before it (the rule admitted() states, without its second table).
+// One pass: a point is admitted by the counts and points as they stand, which already hold the
+// points of `cloud` added before it (the rule admitted() states, without its second tables).
 void VoxelHash::add(const PointCloud& cloud) {
   // A cloud of no points adds nothing and says nothing of surfaces (an odometry frame whose every
   // point falls in full voxels comes as one): taken as "without normals" it ended them for the
@@ -79,7 +98,11 @@ void VoxelHash::add(const PointCloud& cloud) {
     if (!p.allFinite()) continue;
     const VoxelKey voxel = grid.key(p);
     std::uint32_t slot = cell_slots_.find(parent(voxel));
-    if (slot != KeySlots::kNone && cells_[slot].counts[octant(voxel)] >= max_points_) continue;
+    if (slot != KeySlots::kNone) {
+      const std::uint32_t held = cells_[slot].counts[octant(voxel)];
+      if (held >= max_points_) continue;
+      if (held > 0 && spacing_sq_ > 0.0F && crowded(cells_[slot], octant(voxel), p)) continue;
+    }
     if (cloud_.size() == std::numeric_limits<std::uint32_t>::max()) {
       refresh();
       throw InvalidInputError("voxel hash: more than 2^32-1 points");
@@ -89,6 +112,7 @@ void VoxelHash::add(const PointCloud& cloud) {
     const auto index = static_cast<std::uint32_t>(cloud_.size());
     owners_.push_back({slot, static_cast<std::uint32_t>(cell.entries.size())});
     cell.entries.push_back({p, index});
+    if (spacing_sq_ > 0.0F) cell.octants.push_back(static_cast<std::uint8_t>(octant(voxel)));
     if (cell.counts[octant(voxel)]++ == 0) {
       ++voxels_;
       keep_first(cell);
@@ -109,6 +133,7 @@ void VoxelHash::keep_first(Cell& cell) {
   const std::uint32_t to = cell.firsts++;
   if (to == last) return;
   std::swap(cell.entries[to], cell.entries[last]);
+  if (spacing_sq_ > 0.0F) std::swap(cell.octants[to], cell.octants[last]);
   owners_[cell.entries[to].index].at = to;
   owners_[cell.entries[last].index].at = last;
 }

@@ -5,7 +5,9 @@
 // adding a point costs one probe of the hash (and a few more when its cell is new), dropping a
 // cell moves the last points of the flat cloud into its gaps, so a map that gains a frame and
 // loses its far cells is never rebuilt. A cell is 2x2x2 voxels, each admitting at most a bound of
-// points (the odometry map's rule; unbounded for a reference indexed as given).
+// points, and a point only while no point of its voxel lies within the spacing sqrt(v^2 / bound)
+// of it, v the voxel's side (the odometry map's rule: a surface seen again adds nothing once it
+// is covered); a reference indexed as given (unbounded) takes every point.
 // A query visits the cells around its own shell by shell (Chebyshev rings, up to kShells),
 // skipping every cell whose box lies no closer than the worst distance its result set still
 // accepts, and stops once nothing outside can be closer. A query whose answer lies farther (new
@@ -41,7 +43,8 @@ class VoxelHash {
   explicit VoxelHash(double cell_m, std::size_t max_points_per_voxel = kUnbounded);
 
   /// The indices of the points of `cloud` that add(cloud) keeps, in order: a finite point enters
-  /// while its voxel holds fewer than the bound, counting those of `cloud` before it.
+  /// while its voxel holds fewer than the bound and none within spacing_m() of it, counting the
+  /// points of `cloud` admitted before it.
   [[nodiscard]] std::vector<std::uint32_t> admitted(const PointCloud& cloud) const;
   /// Adds the admitted points of `cloud` at the end of cloud(), with their normals (covariances)
   /// while every point added since the hash was last empty came with one; a cloud of no points
@@ -64,6 +67,9 @@ class VoxelHash {
   [[nodiscard]] std::size_t voxels() const noexcept { return voxels_; }
   [[nodiscard]] double cell_m() const noexcept { return cell_m_; }
   [[nodiscard]] std::size_t max_points_per_voxel() const noexcept { return max_points_; }
+  /// The least distance between two points of a voxel: sqrt(v^2 / bound) for a voxel of side v
+  /// (half a cell), 0 for an unbounded hash.
+  [[nodiscard]] double spacing_m() const noexcept { return spacing_m_; }
 
   /// Offers every point that can be closer than result.worstDist() to result.addPoint(squared
   /// distance, index), as nanoflann's findNeighbors does with its result sets.
@@ -108,6 +114,9 @@ class VoxelHash {
   };
   struct Cell {
     std::vector<Entry> entries;  // each occupied voxel's first point first (`firsts` of them)
+    // By entry, with a spacing: its voxel's octant, for the rule to test a point against its own
+    // voxel's points alone (apart from the entries, which the searches read).
+    std::vector<std::uint8_t> octants;
     std::uint32_t firsts = 0;
     std::array<std::uint32_t, 8> counts{};  // points per voxel of the cell (by octant)
     Eigen::Vector3f min{Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity())};
@@ -271,6 +280,17 @@ class VoxelHash {
     return {k.x * 2 + (o & 1U), k.y * 2 + (o >> 1 & 1U), k.z * 2 + (o >> 2 & 1U)};
   }
 
+  // Whether a point of the cell's voxel `octant` lies closer than the spacing to p.
+  [[nodiscard]] bool crowded(const Cell& cell, unsigned octant, const Eigen::Vector3f& p) const {
+    for (std::size_t i = 0; i < cell.entries.size(); ++i) {
+      if (cell.octants[i] == octant && too_close(cell.entries[i].point, p)) return true;
+    }
+    return false;
+  }
+  [[nodiscard]] bool too_close(const Eigen::Vector3f& a, const Eigen::Vector3f& b) const {
+    return (a - b).squaredNorm() < spacing_sq_;
+  }
+
   std::uint32_t add_cell(const VoxelKey& key);
   void remove_cell(std::uint32_t slot);
   void drop_point(std::uint32_t index);
@@ -285,6 +305,8 @@ class VoxelHash {
   double cell_m_;
   double inverse_cell_;
   std::size_t max_points_;
+  double spacing_m_;
+  float spacing_sq_;                  // its square, the test's (0: none)
   KeySlots cell_slots_;               // a cell's key -> its slot
   std::vector<VoxelKey> cell_keys_;   // by slot
   std::vector<Cell> cells_;           // by slot

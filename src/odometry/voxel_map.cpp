@@ -57,6 +57,10 @@ std::size_t VoxelMap::size() const noexcept {
   return hash_->cloud().size();
 }
 
+double VoxelMap::spacing_m() const noexcept {
+  return hash_->spacing_m();
+}
+
 std::size_t VoxelMap::voxels() const noexcept {
   return hash_->voxels();
 }

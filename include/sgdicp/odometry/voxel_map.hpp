@@ -1,9 +1,10 @@
 #pragma once
-// The local map of odometry: cubic voxels, each holding at most a bounded number of points,
+// The local map of odometry: cubic voxels, each holding at most a bounded number of points, no
+// two closer than a spacing (its size follows the surface it covers, not the frames that saw it),
 // updated in place (points added frame by frame, far cells dropped), so its memory is bounded by
-// the region around the sensor and not by the length of the sequence. The map is its own nearest-
-// neighbour index (a voxel hash of cells of 2x2x2 voxels, src/index/voxel_hash.hpp): a frame is
-// registered against it as it stands, with no copy and no build (docs/odometry.md).
+// the region around the sensor and not by the length of the sequence. The map is its own
+// nearest-neighbour index (a voxel hash of cells of 2x2x2 voxels, src/index/voxel_hash.hpp): a
+// frame is registered against it as it stands, with no copy and no build (docs/odometry.md).
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -27,16 +28,18 @@ class VoxelMap {
   VoxelMap& operator=(VoxelMap&&) noexcept;
 
   /// Adds the points of `cloud` (in the map frame): a point enters its voxel while the voxel
-  /// holds fewer than max_points_per_voxel points, and is dropped otherwise (the first points
-  /// of a voxel stay: a static world is seen again, not re-measured). Non-finite points are
-  /// skipped. The points' normals and covariances enter with them while every cloud added came
-  /// with them (estimated once per frame, not over the whole map each frame: docs/odometry.md).
-  /// Throws InvalidSettingsError for a coordinate too large for the voxel size.
+  /// holds fewer than max_points_per_voxel points and none closer to it than spacing_m(), and
+  /// is dropped otherwise (the first points of a voxel stay: a static world is seen again, not
+  /// re-measured, and a surface once covered takes no more, however often it is revisited).
+  /// Non-finite points are skipped. The points' normals and covariances enter with them while every
+  /// cloud added came with them (estimated once per frame, not over the whole map each frame:
+  /// docs/odometry.md). Throws InvalidSettingsError for a coordinate too large for the voxel size.
   void add(const PointCloud& cloud);
 
   /// The indices of the points of `cloud` (in the map frame) that add(cloud) would keep, in
   /// order: what needs a normal before it enters (a frame's surfaces are estimated for these
-  /// alone: on a slow Kinect walk most voxels are full and 5 % of a frame's points enter).
+  /// alone: on a slow Kinect walk most voxels are full or covered and a few % of a frame's points
+  /// enter).
   [[nodiscard]] std::vector<std::uint32_t> admitted(const PointCloud& cloud) const;
 
   /// Drops every cell of 2x2x2 voxels whose first point lies farther than radius_m from
@@ -56,6 +59,9 @@ class VoxelMap {
   [[nodiscard]] bool empty() const noexcept { return size() == 0; }
   [[nodiscard]] double voxel_size_m() const noexcept { return voxel_size_m_; }
   [[nodiscard]] std::size_t max_points_per_voxel() const noexcept { return max_points_; }
+  /// The least distance between two points of a voxel: voxel_size_m / sqrt(max_points_per_voxel)
+  /// (KISS-ICP's rule: N points spread over a voxel's surface lie about that far apart).
+  [[nodiscard]] double spacing_m() const noexcept;
   void clear();
 
  private:
