@@ -63,7 +63,7 @@ std::vector<std::uint32_t> VoxelHash::admitted(const PointCloud& cloud) const {
         latest.push_back(kNone);
       }
       if (held + added[at] >= max_points_) continue;
-      if (held > 0 && crowded(cells_[cell], octant(voxel), p)) continue;
+      if (held > 0 && crowded(cells_[cell], grid, voxel, p)) continue;
       bool near = false;
       for (std::uint32_t j = latest[at]; j != kNone && !near; j = previous[j]) {
         near = too_close(cloud.points[out[j]], p);
@@ -101,7 +101,7 @@ void VoxelHash::add(const PointCloud& cloud) {
     if (slot != KeySlots::kNone) {
       const std::uint32_t held = cells_[slot].counts[octant(voxel)];
       if (held >= max_points_) continue;
-      if (held > 0 && spacing_sq_ > 0.0F && crowded(cells_[slot], octant(voxel), p)) continue;
+      if (held > 0 && spacing_sq_ > 0.0F && crowded(cells_[slot], grid, voxel, p)) continue;
     }
     if (cloud_.size() == std::numeric_limits<std::uint32_t>::max()) {
       refresh();
@@ -112,7 +112,6 @@ void VoxelHash::add(const PointCloud& cloud) {
     const auto index = static_cast<std::uint32_t>(cloud_.size());
     owners_.push_back({slot, static_cast<std::uint32_t>(cell.entries.size())});
     cell.entries.push_back({p, index});
-    if (spacing_sq_ > 0.0F) cell.octants.push_back(static_cast<std::uint8_t>(octant(voxel)));
     if (cell.counts[octant(voxel)]++ == 0) {
       ++voxels_;
       keep_first(cell);
@@ -133,7 +132,6 @@ void VoxelHash::keep_first(Cell& cell) {
   const std::uint32_t to = cell.firsts++;
   if (to == last) return;
   std::swap(cell.entries[to], cell.entries[last]);
-  if (spacing_sq_ > 0.0F) std::swap(cell.octants[to], cell.octants[last]);
   owners_[cell.entries[to].index].at = to;
   owners_[cell.entries[last].index].at = last;
 }

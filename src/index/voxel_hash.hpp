@@ -114,9 +114,6 @@ class VoxelHash {
   };
   struct Cell {
     std::vector<Entry> entries;  // each occupied voxel's first point first (`firsts` of them)
-    // By entry, with a spacing: its voxel's octant, for the rule to test a point against its own
-    // voxel's points alone (apart from the entries, which the searches read).
-    std::vector<std::uint8_t> octants;
     std::uint32_t firsts = 0;
     std::array<std::uint32_t, 8> counts{};  // points per voxel of the cell (by octant)
     Eigen::Vector3f min{Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity())};
@@ -280,10 +277,14 @@ class VoxelHash {
     return {k.x * 2 + (o & 1U), k.y * 2 + (o >> 1 & 1U), k.z * 2 + (o >> 2 & 1U)};
   }
 
-  // Whether a point of the cell's voxel `octant` lies closer than the spacing to p.
-  [[nodiscard]] bool crowded(const Cell& cell, unsigned octant, const Eigen::Vector3f& p) const {
-    for (std::size_t i = 0; i < cell.entries.size(); ++i) {
-      if (cell.octants[i] == octant && too_close(cell.entries[i].point, p)) return true;
+  // Whether a point of `voxel` (of `cell`) lies closer than the spacing to p. The distance first,
+  // the voxel only for an entry that close: a cell lists its 8 voxels' points in no order, and
+  // a byte per entry naming its voxel, kept beside the entries, cost more memory than it saved
+  // time (docs/design.md, *The map's spacing rule*).
+  [[nodiscard]] bool crowded(const Cell& cell, const VoxelGrid& grid, const VoxelKey& voxel,
+                             const Eigen::Vector3f& p) const {
+    for (const Entry& e : cell.entries) {
+      if (too_close(e.point, p) && grid.key(e.point) == voxel) return true;
     }
     return false;
   }
