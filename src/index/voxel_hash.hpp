@@ -38,8 +38,8 @@ class VoxelHash {
   static constexpr std::size_t kUnbounded = std::numeric_limits<std::size_t>::max();
 
   /// An empty hash of cubic cells of side cell_m, each of 2x2x2 voxels admitting at most
-  /// max_points_per_voxel points. Throws InvalidSettingsError for a cell that is not positive and
-  /// finite or a bound of 0.
+  /// max_points_per_voxel points, no two within spacing_m() (none for kUnbounded). Throws
+  /// InvalidSettingsError for a cell that is not positive and finite or a bound of 0.
   explicit VoxelHash(double cell_m, std::size_t max_points_per_voxel = kUnbounded);
 
   /// The indices of the points of `cloud` that add(cloud) keeps, in order: a finite point enters

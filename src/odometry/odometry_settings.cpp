@@ -28,11 +28,12 @@ std::vector<Setting<S>> make_table() {
            "Map voxel side (frames thinned to 0.75 of it for the map, 1.5 times it for the "
            "registration); 0 = 1 % of the first frame's 99th-percentile range, grown when the "
            "second frame or half the last 5 see twice as far"}),
-      setting<S, &S::max_points_per_voxel>({"max-points-per-voxel",
-                                            "max_points_per_voxel",
-                                            {1.0, 10000.0},
-                                            "",
-                                            "Points kept per map voxel"}),
+      setting<S, &S::max_points_per_voxel>(
+          {"max-points-per-voxel",
+           "max_points_per_voxel",
+           {1.0, 10000.0},
+           "",
+           "Points a map voxel keeps, at most, no two closer than voxel / sqrt(count)"}),
       setting<S, &S::initial_threshold_m>(
           {"initial-threshold", "initial_threshold_m", kLength, "m",
            "Correspondence threshold sigma before any motion is observed (d_max = 3 sigma); 0 = "

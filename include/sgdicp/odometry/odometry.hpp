@@ -52,7 +52,8 @@ struct OdometrySettings {
   /// Frames are thinned to one point per 0.75 voxel for the map and per 1.5 voxels for the
   /// registration.
   double voxel_size_m = 0.0;
-  /// Points kept per voxel of the map.
+  /// Points kept per voxel of the map, at most; no two of a voxel closer than
+  /// voxel_size_m / sqrt(max_points_per_voxel), so a place seen again adds nothing once covered.
   std::size_t max_points_per_voxel = 20;
   /// Correspondence threshold sigma before any motion has been observed; 0 = 2 voxels. The
   /// registration's d_max is 3 sigma.
