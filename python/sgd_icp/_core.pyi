@@ -290,10 +290,10 @@ class UncertaintySettings:
     """
 
     method: UncertaintyType
-    """Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the residual
-    variance), sgld (Bayesian ICP: Langevin samples) or svgd (Stein ICP: particles, clustered
-    into modes) (UncertaintyType or one of its names). Keyword uncertainty=. Default
-    UncertaintyType.none.
+    """Pose uncertainty of the result: none, laplace (sandwich covariance of the re-paired optimum:
+    the one to use for a pose graph), sgld (Bayesian ICP: Langevin samples) or svgd (Stein ICP:
+    particles, clustered into modes) (UncertaintyType or one of its names). Keyword uncertainty=.
+    Default UncertaintyType.none.
     """
     samples: int
     """sgld: samples kept, in [2, 1000000]. Keyword uncertainty_samples=. Default 200."""
@@ -323,8 +323,9 @@ class UncertaintySettings:
     Default 3.0.
     """
     temper: bool
-    """Temper the likelihood by the measured correlation of the residuals (false: residuals treated
-    as independent, as the peers do). Keyword temper=. Default True.
+    """laplace: the sandwich of the re-paired optimum and the grid's share; sgld, svgd: the
+    likelihood tempered by the residuals' measured correlation (false: the fixed-pair Hessian with
+    independent residuals, as the peers report). Keyword temper=. Default True.
     """
     block_size: Distance
     """Block side of the sandwich estimator that measures the correlation of residuals, a Distance

@@ -320,8 +320,9 @@ std::vector<Setting<S>> uncertainty_settings() {
            "uncertainty.method",
            {},
            "",
-           "Pose uncertainty of the result: none, laplace (inverse Gauss-Newton matrix times the "
-           "residual variance), sgld (Bayesian ICP: Langevin samples) or svgd (Stein ICP: "
+           "Pose uncertainty of the result: none, laplace (sandwich covariance of the re-paired "
+           "optimum: the one to use for a pose graph), sgld (Bayesian ICP: Langevin samples) or "
+           "svgd (Stein ICP: "
            "particles, clustered into modes)"}),
       setting<S, &S::uncertainty, &U::samples>(
           {"uncertainty-samples", "uncertainty.samples", {2.0, 1e6}, "", "sgld: samples kept"}),
@@ -366,8 +367,9 @@ std::vector<Setting<S>> uncertainty_settings() {
            "uncertainty.temper",
            {},
            "",
-           "Temper the likelihood by the measured correlation of the residuals (false: "
-           "residuals treated as independent, as the peers do)"}),
+           "laplace: the sandwich of the re-paired optimum and the grid's share; sgld, svgd: "
+           "the likelihood tempered by the residuals' measured correlation (false: the "
+           "fixed-pair Hessian with independent residuals, as the peers report)"}),
       setting<S, &S::uncertainty, &U::block_size>(
           {"block-size", "uncertainty.block_size", kScaledRange, "",
            "Block side of the sandwich estimator that measures the correlation of residuals"}),
