@@ -39,6 +39,8 @@ threshold moves the frames' large buffers into the heap): here 1.2-2.4x the live
 depends on the order of allocations (the same 1,000 7-Scenes frames, with and without --report:
 102 and 142 MB). MALLOC_MMAP_THRESHOLD_=131072 in the environment (the CLI inherits it) fixes the
 threshold, and RSS follows the live memory (the map's ~70 bytes a point), ~20 % slower.
+--python also reports the heap in use (glibc's mallinfo2) at each block's end: the live memory,
+which a leak would grow, without the allocator's own keeping.
 """
 
 from __future__ import annotations
@@ -97,6 +99,7 @@ class Run:
     layout: str = ""
     error: str = ""  # why the run went wrong (stopped early, another layout), empty when it did not
     samples: list[tuple[int, float]] = field(default_factory=list)  # (frames done, RSS MB)
+    heap_mb: list[float] = field(default_factory=list)  # --python: malloc's bytes in use per block
 
 
 @dataclass
@@ -319,12 +322,31 @@ def frame_reader(sequence: str, folder: Path) -> Callable[[Path], object]:
     return lambda path: sgd_icp.read_depth_image(path, intrinsics, **CLI_DEPTH)
 
 
+def heap_in_use_mb() -> float:
+    """The bytes glibc's malloc has handed out and not had back (mallinfo2's uordblks + hblkhd):
+    the live memory, without what the allocator keeps after a free; NaN without glibc 2.33+."""
+    import ctypes
+
+    class MallInfo2(ctypes.Structure):
+        _fields_ = [(name, ctypes.c_size_t) for name in (
+            "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks",
+            "fordblks", "keepcost")]
+
+    try:
+        mallinfo2 = ctypes.CDLL(None).mallinfo2
+    except (OSError, AttributeError):
+        return math.nan
+    mallinfo2.restype = MallInfo2
+    info = mallinfo2()
+    return (info.uordblks + info.hblkhd) / 2**20
+
+
 def run_python(folder: Path, sequence: str, frames: int, block: int) -> Run:
     import sgd_icp
 
     read = frame_reader(sequence, folder)
     files = sorted(folder.glob(SEQUENCES[sequence][1]))[:frames]
-    ends, out, rss, samples = set(block_ends(frames, block)), [], [], []
+    ends, out, rss, samples, heap = set(block_ends(frames, block)), [], [], [], []
     start = time.monotonic()
     odometry = sgd_icp.Odometry()
     for k, path in enumerate(files):
@@ -339,10 +361,11 @@ def run_python(folder: Path, sequence: str, frames: int, block: int) -> Run:
         if k + 1 in ends:
             rss.append(mb(proc_status_kb("self")["VmRSS"]))
             samples.append((k + 1, rss[-1]))
+            heap.append(heap_in_use_mb())
             progress(sequence, k + 1, frames, rss[-1], start)
     wall = time.monotonic() - start
     return Run(out, rss, mb(proc_status_kb("self")["VmHWM"]), wall, EXPECTED_LAYOUT[sequence],
-               samples=samples)
+               samples=samples, heap_mb=heap)
 
 
 def print_table(blocks: list[Block], total: dict[str, float]) -> None:
@@ -410,6 +433,10 @@ def main() -> int:
     blocks = make_blocks(run.frames, run.rss_mb, args.block)
     total = totals(blocks, run)
     print_table(blocks, total)
+    if run.heap_mb:
+        print("heap in use at each block's end (malloc, MB): " +
+              ", ".join(f"{h:.1f}" for h in run.heap_mb) +
+              f"; growth after block 1 {run.heap_mb[-1] - run.heap_mb[0]:+.1f} MB")
     failures = check(total, args.frames, run)
     if run.error:
         print(f"run error: {run.error}")
@@ -419,7 +446,8 @@ def main() -> int:
         args.json.write_text(json.dumps({
             "sequence": args.sequence, "mode": mode, "frames": args.frames, "block": args.block,
             "blocks": [asdict(b) for b in blocks], "totals": total, "error": run.error,
-            "failures": failures, "rss_samples": run.samples}, indent=1) + "\n")
+            "failures": failures, "rss_samples": run.samples,
+            "heap_mb": run.heap_mb}, indent=1) + "\n")
     return 1 if run.error or (args.check and failures) else 0
 
 

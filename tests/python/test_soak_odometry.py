@@ -265,3 +265,15 @@ def test_check_needs_two_blocks(so, monkeypatch, capsys):
                                       "2000", "--check"])
     args = so.parse_args()
     assert (args.frames, args.block, args.check, args.python) == (2000, 1000, True, False)
+
+
+def test_heap_in_use_follows_a_live_allocation_and_its_release(so):
+    before = so.heap_in_use_mb()
+    if before != before:  # NaN: not glibc 2.33+
+        pytest.skip("mallinfo2 is not available")
+    buffer = bytearray(64 * 2**20)
+    held = so.heap_in_use_mb()
+    del buffer
+    after = so.heap_in_use_mb()
+    assert held - before > 60.0
+    assert held - after > 60.0
