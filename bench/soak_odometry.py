@@ -37,8 +37,9 @@ early (a crash, an error) always exits 1. Needs Linux (/proc); the CLI mode need
 RSS is what the process holds, with what glibc's malloc keeps after a free (its dynamic mmap
 threshold moves the frames' large buffers into the heap): here 1.2-2.4x the live memory, and it
 depends on the order of allocations (the same 1,000 7-Scenes frames, with and without --report:
-102 and 142 MB). MALLOC_MMAP_THRESHOLD_=131072 in the environment (the CLI inherits it) fixes the
-threshold, and RSS follows the live memory (the map's ~70 bytes a point), ~20 % slower.
+102 and 142 MB). `sgdicp odometry` fixes the threshold at 128 kB itself (apps/odometry.cpp), and
+its RSS follows the live memory (the map's ~70 bytes a point); --python runs with Python's
+allocator settings, as a user's process would.
 --python also reports the heap in use (glibc's mallinfo2) at each block's end: the live memory,
 which a leak would grow, without the allocator's own keeping.
 """
