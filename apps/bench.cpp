@@ -22,6 +22,7 @@
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
+#include "help_layout.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/metrics/metrics.hpp"
 #include "sgdicp/tools/pairs.hpp"
@@ -580,6 +581,21 @@ void add_bench_command(CLI::App& app) {
   add_depth_options(*cmd, o->depth);
   add_method_options(*cmd, o->settings, true);
   add_settings_options(*cmd, o->settings);
+  // What a user of the command sets; every other option is in --help-all.
+  static constexpr std::array<CommonOption, 12> kCommon{
+      {{"perturb", "Start from the ground truth moved by TRANS_M,ROT_RAD[,SEED]"},
+       {"repeat", ""},
+       {"jobs", "Registrations run in parallel (throughput)"},
+       {"csv", ""},
+       {"success", "Success thresholds TRANS_M,ROT_DEG (repeat for several)"},
+       {"method", "Methods, separated by commas: sgd, sgd-point, sgd-plane, sgd-gicp, icp, ..."},
+       {"preset", "default, or paper: the paper's settings"},
+       {"voxel-size", "Thin both clouds on voxels of this side, m; 0 = ~20k points, from the data"},
+       {"max-distance", "Correspondence distance d_max, scaled or m"},
+       {"threads", "Threads of each registration, 0 = every core (same result)"},
+       {"seed", "Seed of the mini-batch sampler; repeat r uses seed + r"},
+       {"intrinsics", "Pinhole intrinsics of .png depth images: a 3x3 K file or fx,fy,cx,cy"}}};
+  arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
 }
 

@@ -1,6 +1,7 @@
 // `sgdicp odometry INPUT --poses-out FILE`: scan-to-map odometry over a folder of frames, the
 // trajectory in the KITTI (and TUM) format, and its errors against a ground truth.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <new>
 #include <optional>
+#include <string_view>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
@@ -18,6 +20,7 @@
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
+#include "help_layout.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/frame_source.hpp"
 #include "sgdicp/io/io.hpp"
@@ -559,6 +562,22 @@ void add_odometry_command(CLI::App& app) {
                       "[default: sgd]");
   add_settings_options(*cmd, o->settings, /*with_voxel_grid=*/false);
   add_depth_options(*cmd, o->depth);
+  // What a user of the command sets; every other option is in --help-all.
+  static constexpr std::array<CommonOption, 13> kCommon{
+      {{"poses-out", "Write each frame's pose here as the run goes (KITTI 3x4 format)"},
+       {"tum", "Also write the trajectory in the TUM format"},
+       {"ground-truth", "Reference poses (KITTI, TUM, a 7-Scenes folder): prints RPE, ATE, drift"},
+       {"report", "Write one CSV row per frame (start, time, inliers, failure)"},
+       {"covariances-out", "Write each frame's 6x6 covariance (with --uncertainty)"},
+       {"map-out", "Write the local map at the end (PLY, PCD or XYZ)"},
+       {"quiet", ""},
+       {"method", "sgd (default), sgd-point, sgd-plane, sgd-gicp; batch: icp, icp-plane, gicp"},
+       {"voxel-size", "Map voxel side, m; 0 = from the first frame's range"},
+       {"max-range", "Points farther from the sensor are dropped, m"},
+       {"threads", "Threads of each frame's registration, 0 = every core"},
+       {"uncertainty", "Each frame's covariance: none, laplace, sgld, svgd"},
+       {"intrinsics", "Pinhole intrinsics of .png depth frames: a 3x3 K file or fx,fy,cx,cy"}}};
+  arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
 }
 

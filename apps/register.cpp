@@ -1,4 +1,5 @@
 // `sgdicp register SOURCE REFERENCE`: one registration, printed as text or JSON.
+#include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -12,6 +13,7 @@
 
 #include "cli_common.hpp"
 #include "cli_settings.hpp"
+#include "help_layout.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/transform_io.hpp"
 #include "sgdicp/metrics/metrics.hpp"
@@ -271,6 +273,22 @@ void add_register_command(CLI::App& app) {
   add_settings_options(*cmd, o->settings);
   add_table_options(*cmd, global_settings_table(), GlobalSettings{}, o->global,
                     "Global registration (only with --init global; docs/global.md)");
+  // What a user of the command sets; every other option is in --help-all.
+  static constexpr std::array<CommonOption, 13> kCommon{
+      {{"method", "sgd (default), sgd-point, sgd-plane, sgd-gicp; batch: icp, icp-plane, gicp"},
+       {"preset", "default, or paper: the paper's settings"},
+       {"init", "Initial T_reference_source: a 4x4 or 3x4 file, 12/16 numbers, or 'global'"},
+       {"ground-truth", ""},
+       {"output", ""},
+       {"aligned", ""},
+       {"json", "Print the result as one JSON object instead of text"},
+       {"voxel-size", "Thin both clouds on voxels of this side, m; 0 = ~20k points, from the data"},
+       {"max-distance", "Correspondence distance d_max, scaled or m"},
+       {"threads", "Threads of one registration, 0 = every core (same result)"},
+       {"seed", "Seed of the mini-batch sampler (same seed, same result)"},
+       {"uncertainty", "Pose covariance: none, laplace (for a pose graph), sgld, svgd"},
+       {"intrinsics", "Pinhole intrinsics of .png depth images: a 3x3 K file or fx,fy,cx,cy"}}};
+  arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
 }
 

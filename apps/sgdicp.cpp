@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.hpp"
+#include "help_layout.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/version.hpp"
 
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
   CLI::App app{
       "sgdicp: register 3D point clouds with SGD-ICP (ICP solved by stochastic gradient descent "
       "on mini-batches; Maken, Ramos, Ott, ICRA 2019)."};
+  sgdicp::cli::take_help_all(argc, argv);
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("sgdicp ") + sgdicp::kVersion);
   sgdicp::cli::add_register_command(app);

@@ -28,7 +28,7 @@ done
 expect_error "--init global with a batch method" "--init global: only with an SGD method" \
   register "$tmp/plane.xyz" "$tmp/plane.xyz" --init global --method icp
 check_help_mentions() {
-  if "$BIN" register --help | tr -s ' \n' ' ' | grep -q -- "$1"; then pass "register --help: $1"; else fail "register --help lacks '$1'"; fi
+  if "$BIN" register --help-all | tr -s ' \n' ' ' | grep -q -- "$1"; then pass "register --help: $1"; else fail "register --help lacks '$1'"; fi
 }
 check_help_mentions "or 'global'"
 check_help_mentions "--global-feature-points UINT .* points in \[10, 10000000\] \[default: 3000\]"

@@ -274,7 +274,7 @@ PY
 else
   skip "depth image checks (python3 missing to write the PNGs)"
 fi
-run register --help
+run register --help-all
 if grep -q -- '--depth-scale FLOAT .*data.s own.*\[default: 0\]' "$tmp/out" &&
   grep -q -- '--max-depth FLOAT .*m \[default: 10\]' "$tmp/out"; then
   pass "register --help gives the depth options with unit and default"

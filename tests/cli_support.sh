@@ -94,10 +94,12 @@ is_4x4_matrix() {
 }
 
 # The option entries ("  -x,--name ARG  description ...", continuation lines joined) of a
-# CLI11 help text, one per line.
+# CLI11 help text, one per line: those under "Options:" and under every group heading of
+# --help-all ("Refinement:", "Global registration (...):"), not the positionals.
 option_entries() {
   awk '
-    /^Options:/ { in_options = 1; next }
+    /^Positionals:/ { in_options = 0; next }
+    /^[A-Za-z].*:$/ { in_options = 1; next }
     /^[A-Za-z]/ { in_options = 0 }
     in_options && /^ +-/ { if (entry != "") print entry; entry = $0; next }
     in_options && /^ +[^ -]/ && entry != "" { entry = entry " " $0; next }

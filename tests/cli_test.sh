@@ -28,34 +28,58 @@ else
   fail "sgdicp --version printed '$(cat "$tmp/out")', CMakeLists.txt has '$project_version'"
 fi
 
-run register --help
+# --help: what a user of the command sets, at most 15 options, each on one line; --help-all:
+# every option, grouped by the part that reads it, each with its unit and default.
+for command in register odometry bench; do
+  run "$command" --help
+  cp "$tmp/out" "$tmp/short_help"
+  entries="$(option_entries "$tmp/short_help" | wc -l)"
+  if [ "$rc" -eq 0 ] && [ "$entries" -le 15 ] && grep -q -- '--help-all' "$tmp/short_help"; then
+    pass "sgdicp $command --help: $entries options, --help-all among them"
+  else
+    fail "sgdicp $command --help (exit $rc): $entries options (at most 15), --help-all named?"
+  fi
+  long="$(option_entries "$tmp/short_help" | awk 'length($0) > 160' | sed -E 's/^ +//; s/ .*//' | tr '\n' ' ')"
+  if [ -z "$long" ]; then
+    pass "sgdicp $command --help: every help fits one line"
+  else
+    fail "sgdicp $command --help: help longer than one line: $long"
+  fi
+done
+
+run register --help-all
 if [ "$rc" -eq 0 ]; then
-  pass "sgdicp register --help exits 0"
+  pass "sgdicp register --help-all exits 0"
   cp "$tmp/out" "$tmp/register_help"
-  check_help "register --help" "$tmp/register_help" --init --json --output --aligned \
+  check_help "register --help-all" "$tmp/register_help" --init --json --output --aligned \
     "${SETTINGS_OPTIONS[@]}"
+  if grep -q '^Refinement:' "$tmp/register_help" && grep -q '^Uncertainty:' "$tmp/register_help"; then
+    pass "register --help-all groups the settings by part"
+  else
+    fail "register --help-all has no Refinement or Uncertainty group"
+  fi
   # Units of the settings that have one.
   for spec in "--max-distance:scaled" "--learning-rate:scaled" "--translation-tolerance:scaled" \
     "--rotation-tolerance:rad" "--max-distance-unit:m"; do
     opt="${spec%%:*}"
     unit="${spec#*:}"
     if entry_of "$tmp/register_help" "$opt" | grep -qw -- "$unit"; then
-      pass "register --help: $opt states its unit ($unit)"
+      pass "register --help-all: $opt states its unit ($unit)"
     else
-      fail "register --help: $opt does not state its unit ($unit)"
+      fail "register --help-all: $opt does not state its unit ($unit)"
     fi
   done
 else
-  fail "sgdicp register --help (exit $rc)"
+  fail "sgdicp register --help-all (exit $rc)"
 fi
 
-run bench --help
+run bench --help-all
 if [ "$rc" -eq 0 ]; then
-  pass "sgdicp bench --help exits 0"
+  pass "sgdicp bench --help-all exits 0"
   cp "$tmp/out" "$tmp/bench_help"
-  check_help "bench --help" "$tmp/bench_help" --perturb --csv --repeat "${SETTINGS_OPTIONS[@]}"
+  check_help "bench --help-all" "$tmp/bench_help" --perturb --csv --repeat "${SETTINGS_OPTIONS[@]}"
 else
-  fail "sgdicp bench --help (exit $rc)"
+  fail "sgdicp bench --help-all (exit $rc)"
 fi
 
 expect_error "no subcommand" 'subcommand|required|help'

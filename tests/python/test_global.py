@@ -138,7 +138,7 @@ def test_global_keywords_are_the_cli_options_and_documented():
     cli = find_cli()
     if cli is None:
         pytest.skip("sgdicp CLI not found (set SGDICP_BIN or build it with scripts/build.sh)")
-    help_text = subprocess.run([str(cli), "register", "--help"], capture_output=True, text=True,
+    help_text = subprocess.run([str(cli), "register", "--help-all"], capture_output=True, text=True,
                                timeout=60, check=True).stdout
     options = re.findall(r"--(global-[a-z-]+)", help_text)
     assert sorted(set(options)) == sorted(k.replace("_", "-") for k in keywords)
