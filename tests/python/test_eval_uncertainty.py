@@ -41,12 +41,14 @@ def test_mcmc_reference_agrees_with_the_methods_on_a_small_problem(tmp_path):
     rows = {r["method"]: r for r in csv.DictReader(open(tmp_path / "mcmc.csv"))}
     assert set(rows) == {"laplace", "sgld", "svgd"}
     assert float(rows["laplace"]["rhat_max"]) < 1.05  # the reference converged
-    # Laplace is the fixed-pair posterior: the library's sigma, kappa and pairs are the script's.
+    # The script's energy is the library's: its sigma from the same pairs, normals and d_max.
     assert float(rows["laplace"]["sigma_ratio"]) == pytest.approx(1.0, abs=1e-4)
-    assert float(rows["laplace"]["kl_mcmc_method"]) < 0.1
-    assert float(rows["laplace"]["kl_method_mcmc"]) < 0.1
-    # The samplers near it (measured 0.96-1.11 on this problem; docs/uncertainty.md).
-    for method in ("sgld", "svgd"):
+    # laplace is the sandwich of the re-paired optimum, not this fixed-pair posterior: near it on
+    # a synthetic scene whose pairs hardly change (std ratios 0.98 / 1.09, KL 0.43 from the
+    # Newton step's offset; docs/uncertainty.md), far from it only where re-pairing softens.
+    assert float(rows["laplace"]["kl_mcmc_method"]) < 1.0
+    # The methods near it (measured 0.93-1.11 on this problem).
+    for method in ("laplace", "sgld", "svgd"):
         for block in ("std_ratio_t", "std_ratio_r"):
             assert 0.75 < float(rows[method][block]) < 1.4, (method, block)
     assert (tmp_path / "mcmc.png").stat().st_size > 10000
