@@ -4,7 +4,6 @@
 #include <cstring>
 #include <string>
 
-#include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/registration/settings.hpp"
 
@@ -33,8 +32,9 @@ std::string part_of_field(std::string_view field) {
   return "Registration run";
 }
 
-// The group of an option in --help-all: a setting of a table by its part, an option already in
-// a named group in it, any other one (files in and out, depth images) among the command's own.
+// The group of an option in --help-all: a registration setting by its part of the table, an
+// odometry setting (in the odometry command), the --global-* and the depth-image options in
+// their own, any other one (files in and out) among the command's options.
 std::string group_of(const CLI::Option& option, bool odometry) {
   const std::string name = long_name(option);
   if (odometry) {  // its --voxel-size is the map's, not a registration's grid
