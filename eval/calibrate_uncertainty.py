@@ -284,7 +284,9 @@ STATISTICS = ("var_ratio_t", "std_ratio_t", "bias_share_t", "var_ratio_r", "std_
 
 
 def summarize(errors: np.ndarray, covs: np.ndarray) -> dict:
-    """The calibration statistics of (n, 6) errors against their (n, 6, 6) covariances."""
+    """The calibration statistics of (n, 6) errors against their (n, 6, 6) covariances (a NEES
+    that is NaN, of a covariance not positive definite, is left out of its mean and median and
+    counts as outside both coverages)."""
     e, P = np.asarray(errors, float).reshape(-1, 6), np.asarray(covs, float).reshape(-1, 6, 6)
     n = len(e)
     if n == 0:
@@ -298,7 +300,7 @@ def summarize(errors: np.ndarray, covs: np.ndarray) -> dict:
         out[f"var_ratio_{b}"] = float(np.trace(mean_p[s, s]) / np.trace(second[s, s]))
         out[f"std_ratio_{b}"] = math.sqrt(out[f"var_ratio_{b}"])
         out[f"bias_share_{b}"] = float(mean_e[s] @ mean_e[s] / np.trace(second[s, s]))
-    out.update(mean_nees=float(np.mean(nees)), median_nees=float(np.median(nees)),
+    out.update(mean_nees=float(np.nanmean(nees)), median_nees=float(np.nanmedian(nees)),
                coverage_1sigma=float(np.mean(nees < CHI2_1SIGMA)),
                coverage_2sigma=float(np.mean(nees < CHI2_2SIGMA)))
     return out
@@ -494,7 +496,9 @@ def time_split(rows: list[dict]) -> str:
 
 
 def jsonable(v):
-    """v with NaN and infinities as None (JSON has neither), numpy scalars as Python's."""
+    """v with NaN and infinities as None (JSON has neither), numpy values as Python's."""
+    if isinstance(v, np.ndarray):
+        v = v.tolist()
     if isinstance(v, np.generic):
         v = v.item()
     if isinstance(v, dict):

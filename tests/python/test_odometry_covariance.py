@@ -75,9 +75,10 @@ def test_a_known_right_perturbation_gives_its_xi_and_nees(oc):
     np.testing.assert_allclose(oc.se3_log(oc.inverse(R_true) @ R_est), -xi0, atol=1e-12)
     # NEES against a diagonal covariance: sum of (xi_i / sigma_i)^2
     sig = np.array([0.01, 0.01, 0.01, 0.001, 0.001, 0.001])
-    assert oc.nees_of(xi, np.diag(sig**2)) == pytest.approx(float(np.sum((xi0 / sig) ** 2)))
-    assert oc.nees_of(xi, np.diag(4 * sig**2)) == pytest.approx(float(np.sum((xi0 / sig) ** 2)) / 4)
-    assert math.isnan(oc.nees_of(xi, np.diag([1, 1, 1, 1, 1, -1.0])))
+    expected = float(np.sum((xi0 / sig) ** 2))
+    assert oc.cal.nees_of(xi, np.diag(sig**2)) == pytest.approx(expected)
+    assert oc.cal.nees_of(xi, np.diag(4 * sig**2)) == pytest.approx(expected / 4)
+    assert math.isnan(oc.cal.nees_of(xi, np.diag([1, 1, 1, 1, 1, -1.0])))
 
 
 def test_the_anchors_error_is_carried_by_the_adjoint_of_the_relative_pose_inverse(oc):
@@ -111,7 +112,7 @@ def test_pair_rows_skip_lost_frames_and_score_a_known_error(oc):
     # the first pair's anchor (frame 0) has a zero covariance: C_sum = C_1
     np.testing.assert_allclose(rows[0]["C_sum"], covs[1])
     C_sum = covs[2] + oc.carried(covs[1], oc.inverse(est[1]) @ est[2])
-    assert rows[1]["nees_sum"] == pytest.approx(oc.nees_of(xi0, C_sum))
+    assert rows[1]["nees_sum"] == pytest.approx(oc.cal.nees_of(xi0, C_sum))
     assert rows[1]["nees_sum"] < rows[1]["nees"]  # more predicted variance, a smaller NEES
     failed = np.array([False, False, True, False])
     assert [r["k"] for r in oc.pair_rows(est, true, covs, failed)] == [1]
@@ -126,14 +127,14 @@ def test_calibration_of_errors_drawn_from_their_covariance(oc):
     C = np.diag([1e-4, 2e-4, 4e-5, 1e-6, 3e-6, 2e-6])
     C[0, 4] = C[4, 0] = 5e-6
     e = rng.multivariate_normal(np.zeros(6), C, 20000)
-    s = oc.calibration(e, np.repeat(C[None], len(e), axis=0))
+    s = oc.cal.summarize(e, np.repeat(C[None], len(e), axis=0))
     assert s["mean_nees"] == pytest.approx(6, rel=0.03)
     assert s["coverage_1sigma"] == pytest.approx(0.683, abs=0.02)
     assert s["coverage_2sigma"] == pytest.approx(0.954, abs=0.01)
     assert s["var_ratio_t"] == pytest.approx(1, rel=0.05)
     assert s["var_ratio_r"] == pytest.approx(1, rel=0.05)
     # errors twice as wide: NEES x4, variance ratio / 4; an offset shows as bias
-    s2 = oc.calibration(2 * e + np.r_[0.05, 0, 0, 0, 0, 0], np.repeat(C[None], len(e), axis=0))
+    s2 = oc.cal.summarize(2 * e + np.r_[0.05, 0, 0, 0, 0, 0], np.repeat(C[None], len(e), axis=0))
     assert s2["var_ratio_r"] == pytest.approx(0.25, rel=0.05)
     assert s2["bias_share_t"] > 0.5 and s2["bias_share_r"] < 0.01
 
