@@ -284,9 +284,8 @@ STATISTICS = ("var_ratio_t", "std_ratio_t", "bias_share_t", "var_ratio_r", "std_
 
 
 def summarize(errors: np.ndarray, covs: np.ndarray) -> dict:
-    """The calibration statistics of (n, 6) errors against their (n, 6, 6) covariances (a NEES
-    that is NaN, of a covariance not positive definite, is left out of its mean and median and
-    counts as outside both coverages)."""
+    """The calibration statistics of (n, 6) errors against their (n, 6, 6) covariances (a NaN NEES,
+    not positive definite, is left out of the mean and median, outside both coverages)."""
     e, P = np.asarray(errors, float).reshape(-1, 6), np.asarray(covs, float).reshape(-1, 6, 6)
     n = len(e)
     if n == 0:
