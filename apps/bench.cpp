@@ -589,12 +589,12 @@ void add_bench_command(CLI::App& app) {
        {"csv", ""},
        {"success", "Success thresholds TRANS_M,ROT_DEG (repeat for several)"},
        {"method", "Methods, separated by commas: sgd, sgd-point, sgd-plane, sgd-gicp, icp, ..."},
-       {"preset", "default, or paper: the paper's settings"},
-       {"voxel-size", "Thin both clouds on voxels of this side, m; 0 = ~20k points, from the data"},
-       {"max-distance", "Correspondence distance d_max, scaled or m"},
+       kPresetBrief,
+       kGridBrief,
+       kMaxDistanceBrief,
        {"threads", "Threads of each registration, 0 = every core (same result)"},
        {"seed", "Seed of the mini-batch sampler; repeat r uses seed + r"},
-       {"intrinsics", "Pinhole intrinsics of .png depth images: a 3x3 K file or fx,fy,cx,cy"}}};
+       kIntrinsicsBrief}};
   arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
 }

@@ -22,6 +22,17 @@ struct CommonOption {
   std::string_view brief;
 };
 
+/// The briefs of the options that several commands show.
+inline constexpr CommonOption kMethodBrief{
+    "method", "sgd (default), sgd-point, sgd-plane, sgd-gicp; batch: icp, icp-plane, gicp"};
+inline constexpr CommonOption kPresetBrief{"preset", "default, or paper: the paper's settings"};
+inline constexpr CommonOption kGridBrief{
+    "voxel-size", "Thin both clouds on voxels of this side, m; 0 = ~20k points, from the data"};
+inline constexpr CommonOption kMaxDistanceBrief{"max-distance",
+                                                "Correspondence distance d_max, scaled or m"};
+inline constexpr CommonOption kIntrinsicsBrief{
+    "intrinsics", "Pinhole intrinsics of .png depth images: a 3x3 K file or fx,fy,cx,cy"};
+
 /// Lays out `command`'s help: with --help, the options in `common` under "Options" and the others
 /// hidden; with --help-all, every option with its whole help, in the group of the part that reads
 /// it. Adds --help-all.

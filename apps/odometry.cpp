@@ -571,12 +571,12 @@ void add_odometry_command(CLI::App& app) {
        {"covariances-out", "Write each frame's 6x6 covariance (with --uncertainty)"},
        {"map-out", "Write the local map at the end (PLY, PCD or XYZ)"},
        {"quiet", ""},
-       {"method", "sgd (default), sgd-point, sgd-plane, sgd-gicp; batch: icp, icp-plane, gicp"},
+       kMethodBrief,
        {"voxel-size", "Map voxel side, m; 0 = from the first frame's range"},
        {"max-range", "Points farther from the sensor are dropped, m"},
        {"threads", "Threads of each frame's registration, 0 = every core"},
        {"uncertainty", "Each frame's covariance: none, laplace, sgld, svgd"},
-       {"intrinsics", "Pinhole intrinsics of .png depth frames: a 3x3 K file or fx,fy,cx,cy"}}};
+       kIntrinsicsBrief}};
   arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
 }

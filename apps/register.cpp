@@ -275,19 +275,19 @@ void add_register_command(CLI::App& app) {
                     "Global registration (only with --init global; docs/global.md)");
   // What a user of the command sets; every other option is in --help-all.
   static constexpr std::array<CommonOption, 13> kCommon{
-      {{"method", "sgd (default), sgd-point, sgd-plane, sgd-gicp; batch: icp, icp-plane, gicp"},
-       {"preset", "default, or paper: the paper's settings"},
+      {kMethodBrief,
+       kPresetBrief,
        {"init", "Initial T_reference_source: a 4x4 or 3x4 file, 12/16 numbers, or 'global'"},
        {"ground-truth", ""},
        {"output", ""},
        {"aligned", ""},
        {"json", "Print the result as one JSON object instead of text"},
-       {"voxel-size", "Thin both clouds on voxels of this side, m; 0 = ~20k points, from the data"},
-       {"max-distance", "Correspondence distance d_max, scaled or m"},
+       kGridBrief,
+       kMaxDistanceBrief,
        {"threads", "Threads of one registration, 0 = every core (same result)"},
        {"seed", "Seed of the mini-batch sampler (same seed, same result)"},
        {"uncertainty", "Pose covariance: none, laplace (for a pose graph), sgld, svgd"},
-       {"intrinsics", "Pinhole intrinsics of .png depth images: a 3x3 K file or fx,fy,cx,cy"}}};
+       kIntrinsicsBrief}};
   arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
 }
