@@ -386,7 +386,9 @@ std::vector<double> tum_timestamps_s(const FrameSource& source, std::size_t fram
 }
 
 void write_map(const OdometryOptions& o, const Odometry& odometry) {
-  if (!o.map_out.empty()) write_point_cloud(o.map_out, odometry.map_cloud(o.map_voxel_m));
+  if (o.map_out.empty()) return;
+  const WholeMap* map = odometry.whole_map();
+  write_point_cloud(o.map_out, map ? map->cloud() : PointCloud{});
 }
 
 // --map-out is checked before the run, so that a long run does not end in an unwritable name.
@@ -402,6 +404,18 @@ void check_map_options(const OdometryOptions& o) {
                                ": the map is written as PLY, PCD or XYZ, give it a .ply, .pcd or "
                                ".xyz name");
   }
+}
+
+// The local map's size, and the whole map's when one is kept (--map-out).
+std::string map_summary(const Odometry& odometry) {
+  const VoxelMap* local = odometry.map();
+  std::string out = "local map: " + std::to_string(local ? local->size() : 0) + " points in " +
+                    std::to_string(local ? local->voxels() : 0) + " voxels";
+  if (const WholeMap* whole = odometry.whole_map()) {
+    out += "; whole map: " + std::to_string(whole->size()) + " points (voxel " +
+           format_number(whole->voxel_size_m()) + " m)";
+  }
+  return out;
 }
 
 // The run in numbers: frames, failures, time per frame, map size, files written.
@@ -421,8 +435,7 @@ void print_run_summary(const OdometryOptions& o, const std::string& method,
             << ", time per frame: median " << median_of(times_ms) << " ms, max "
             << (times_ms.empty() ? 0.0 : *std::max_element(times_ms.begin(), times_ms.end()))
             << " ms, " << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
-            << "map: " << (odometry.map() ? odometry.map()->size() : 0) << " points in "
-            << (odometry.map() ? odometry.map()->voxels() : 0) << " voxels\n"
+            << map_summary(odometry) << '\n'
             << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum)
             << (o.covariances_out.empty() ? "" : ", covariances: " + o.covariances_out)
             << (o.map_out.empty() ? "" : ", map: " + o.map_out) << '\n';
@@ -466,6 +479,7 @@ void run(const OdometryOptions& o) {
 
   return_large_buffers_at_free();
   Odometry odometry(settings, method.name, method.sgd, method.batch);
+  if (!o.map_out.empty()) odometry.keep_whole_map(o.map_voxel_m);
   FrameWriters writers(o, tum_timestamps_s(source, frames, rate_hz));
   const StopOnSignal stop;
   const auto start = std::chrono::steady_clock::now();
@@ -548,11 +562,12 @@ void add_odometry_command(CLI::App& app) {
                   "Write each frame's pose covariance relative to the map (m, rad): one line of "
                   "36 numbers, 6x6 row-major, nan for none; needs --uncertainty");
   cmd->add_option("--map-out", o->map_out,
-                  "Write the local map at the end, or when a signal stops the run (the first "
-                  "frame's coordinates, metres): PLY, PCD or XYZ by the extension");
+                  "Write the whole map at the end, or when a signal stops the run: every "
+                  "registered frame's points in the first frame's coordinates, metres, one "
+                  "centroid per --map-voxel (PLY, PCD or XYZ by the extension)");
   cmd->add_option("--map-voxel", o->map_voxel_m,
-                  "Thin the written map to one centroid per voxel of this side, m [default: 0 = "
-                  "the map as kept, up to --max-points-per-voxel per map voxel]");
+                  "Voxel of the written map: one centroid per voxel of this side, m [default: 0 = "
+                  "the odometry's voxel]");
   cmd->add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
   cmd->add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
   add_table_options(*cmd, odometry_settings_table(), OdometrySettings{}, o->odometry_values);
@@ -569,7 +584,7 @@ void add_odometry_command(CLI::App& app) {
        {"ground-truth", "Reference poses (KITTI, TUM, a 7-Scenes folder): prints RPE, ATE, drift"},
        {"report", "Write one CSV row per frame (start, time, inliers, failure)"},
        {"covariances-out", "Write each frame's 6x6 covariance (with --uncertainty)"},
-       {"map-out", "Write the local map at the end (PLY, PCD or XYZ)"},
+       {"map-out", "Write the whole map at the end (PLY, PCD or XYZ)"},
        {"quiet", ""},
        kMethodBrief,
        {"voxel-size", "Map voxel side, m; 0 = from the first frame's range"},

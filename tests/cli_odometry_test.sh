@@ -77,16 +77,19 @@ else
   fail "odometry with a bad frame (exit $rc): $(head -c 400 "$tmp/err")"
 fi
 
-# The map at the end, as PLY, and thinned: fewer points, every one finite.
+# The whole map at the end, as PLY (as many points as the summary says), and thinned: fewer
+# points, every one finite.
 run odometry "$seq" --poses-out "$tmp/p3.txt" --map-out "$tmp/map.ply" -q
+said=$(grep -o 'whole map: [0-9]*' "$tmp/out" | grep -o '[0-9]*$')
 run odometry "$seq" --poses-out "$tmp/p4.txt" --map-out "$tmp/map_thin.xyz" --map-voxel 0.5 -q
 full=$(awk '/^element vertex/ { print $3 }' "$tmp/map.ply" 2>/dev/null)
 thin=$(grep -c . "$tmp/map_thin.xyz" 2>/dev/null || echo 0)
 if [ "$rc" -eq 0 ] && grep -q "map: $tmp/map_thin.xyz" "$tmp/out" && [ "${full:-0}" -gt "$thin" ] &&
+  [ "${said:-none}" = "$full" ] &&
   [ "$thin" -gt 0 ] && ! grep -qi 'nan\|inf' "$tmp/map_thin.xyz"; then
-  pass "odometry --map-out writes the map (PLY: $full points; --map-voxel 0.5: $thin)"
+  pass "odometry --map-out writes the whole map (PLY: $full points; --map-voxel 0.5: $thin)"
 else
-  fail "odometry --map-out (exit $rc): full ${full:-none}, thinned $thin: $(head -c 300 "$tmp/err")"
+  fail "odometry --map-out (exit $rc): full ${full:-none} (summary: ${said:-none}), thinned $thin: $(head -c 300 "$tmp/err")"
 fi
 expect_error "odometry --map-out with an unwritable format" '.ply, .pcd or .xyz' odometry "$seq" --poses-out "$tmp/m.txt" --map-out "$tmp/map.vtk"
 [ -e "$tmp/m.txt" ] && fail "odometry ran before refusing --map-out map.vtk" ||

@@ -21,6 +21,7 @@
 #include "sgdicp/metrics/trajectory_metrics.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/odometry/voxel_map.hpp"
+#include "sgdicp/odometry/whole_map.hpp"
 #include "sgdicp/points/random_downsample.hpp"
 #include "sgdicp/points/scaling.hpp"
 #include "sgdicp/points/voxel_grid.hpp"

@@ -324,8 +324,8 @@ class UncertaintySettings:
     """
     temper: bool
     """laplace: the sandwich of the re-paired optimum and the grid's share; sgld, svgd: the
-    likelihood tempered by the residuals' measured correlation (false: the fixed-pair Hessian with
-    independent residuals, as the peers report). Keyword temper=. Default True.
+    likelihood tempered by the residuals' measured correlation (false: the fixed-pair Hessian
+    with independent residuals, as the peers report). Keyword temper=. Default True.
     """
     block_size: Distance
     """Block side of the sandwich estimator that measures the correlation of residuals, a Distance
@@ -1854,9 +1854,21 @@ class Odometry:
     def map_points(self) -> int:
         """Points in the local map."""
     def map_cloud(self, voxel_size: float = 0.0) -> npt.NDArray[np.float32]:
-        """The local map's points, an (N, 3) float32 array in the first frame's coordinates
-        (metres), thinned to one centroid per voxel of voxel_size metres when above 0 (as `sgdicp
-        odometry --map-out --map-voxel`).
+        """The local map's points (what the next frame is registered to: the voxels within max_range
+        of the last pose), an (N, 3) float32 array in the first frame's coordinates (metres),
+        thinned to one centroid per voxel of voxel_size metres when above 0. The whole map:
+        whole_map().
+        """
+    def keep_whole_map(self, voxel_size: float = 0.0) -> None:
+        """From the next frame on, keeps the whole map: every registered frame's points in the first
+        frame's coordinates, one centroid per voxel of voxel_size metres (0 = the odometry's
+        voxel, following it when it grows), as `sgdicp odometry --map-out --map-voxel` writes it.
+        Lost frames do not enter it; its memory grows with the space covered, not with the
+        frames.
+        """
+    def whole_map(self) -> npt.NDArray[np.float32]:
+        """The whole map kept since keep_whole_map(): an (N, 3) float32 array in the first frame's
+        coordinates (metres); empty before keep_whole_map() or any registered frame.
         """
     @property
     def lost_frames(self) -> int:

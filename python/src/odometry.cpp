@@ -208,9 +208,25 @@ void bind_odometry(py::module_& m) {
             return array_from_cloud(o.map_cloud(voxel_size));
           },
           "voxel_size"_a = 0.0,
-          "The local map's points, an (N, 3) float32 array in the first frame's coordinates "
-          "(metres), thinned to one centroid per voxel of voxel_size metres when above 0 (as "
-          "`sgdicp odometry --map-out --map-voxel`).")
+          "The local map's points (what the next frame is registered to: the voxels within "
+          "max_range of the last pose), an (N, 3) float32 array in the first frame's coordinates "
+          "(metres), thinned to one centroid per voxel of voxel_size metres when above 0. The "
+          "whole map: whole_map().")
+      .def(
+          "keep_whole_map", &Odometry::keep_whole_map, "voxel_size"_a = 0.0,
+          "From the next frame on, keeps the whole map: every registered frame's points in the "
+          "first frame's coordinates, one centroid per voxel of voxel_size metres (0 = the "
+          "odometry's voxel, following it when it grows), as `sgdicp odometry --map-out "
+          "--map-voxel` writes it. Lost frames do not enter it; its memory grows with the space "
+          "covered, not with the frames.")
+      .def(
+          "whole_map",
+          [](const Odometry& o) {
+            const WholeMap* map = o.whole_map();
+            return array_from_cloud(map ? map->cloud() : PointCloud{});
+          },
+          "The whole map kept since keep_whole_map(): an (N, 3) float32 array in the first "
+          "frame's coordinates (metres); empty before keep_whole_map() or any registered frame.")
       .def_property_readonly("lost_frames", &Odometry::lost_frames,
                              "Frames lost so far (no start registered them, or unreadable).")
       .def_property_readonly("recovered_frames", &Odometry::recovered_frames,

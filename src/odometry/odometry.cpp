@@ -223,6 +223,30 @@ PointCloud Odometry::map_cloud(double voxel_size_m) const {
   return voxel_size_m > 0.0 ? voxel_downsample(cloud, voxel_size_m) : cloud;
 }
 
+void Odometry::keep_whole_map(double voxel_size_m) {
+  if (!(voxel_size_m >= 0.0 && std::isfinite(voxel_size_m))) {
+    throw InvalidSettingsError("whole map: voxel size must be 0 (the odometry's) or positive, got " +
+                               format_number(voxel_size_m) + " m");
+  }
+  whole_map_voxel_m_ = voxel_size_m;
+  whole_map_.reset();
+}
+
+// Made at the first registered frame after keep_whole_map, when the odometry's voxel is known; a
+// map on the odometry's voxel follows it when it grows. A map whose voxel is no finer than the
+// map frame's grid takes the map frame's centroids (a voxel's point is then the mean of its
+// sub-voxels' centroids, not of their points): the full frame cost 6.5 ms more per 7-Scenes
+// frame (24 -> 30 ms), the map frame nothing measurable.
+void Odometry::add_to_whole_map(const PointCloud& cropped, const PointCloud& map_frame,
+                                const Eigen::Matrix4d& T) {
+  if (!whole_map_voxel_m_) return;
+  const bool follows = *whole_map_voxel_m_ == 0.0;
+  if (!whole_map_) whole_map_.emplace(follows ? voxel_size_m_ : *whole_map_voxel_m_);
+  if (follows && voxel_size_m_ > whole_map_->voxel_size_m()) whole_map_->regrid(voxel_size_m_);
+  const bool thinned_enough = whole_map_->voxel_size_m() >= kMapThinning * voxel_size_m_;
+  whole_map_->add(thinned_enough ? map_frame : cropped, T);
+}
+
 std::size_t Odometry::lost_frames() const noexcept {
   return static_cast<std::size_t>(
       std::count_if(reports_.begin(), reports_.end(), [](const auto& r) { return r.failed; }));
@@ -296,6 +320,7 @@ Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double ran
     report.converged = true;
     if (with_uncertainty()) report.covariance.setZero();  // exact: it defines the coordinates
     report.message = poses_.empty() ? "first frame" : "map restarted (no map before)";
+    add_to_whole_map(cropped, map_frame, report.T_first_frame);
     return finish(report, map_frame, started);
   }
   const PointCloud source = voxel_downsample(map_frame, kSourceThinning * voxel_size_m_, threads());
@@ -313,9 +338,12 @@ Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double ran
     // A lost frame says nothing of the scene (a scan of another sensor, say): a growth it asked
     // for is taken back (the frame does not enter the map), and its range is not kept.
     take_back(grown);
-  } else if (grown) {
-    report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
-                      format_number(voxel_size_m_) + " m (the frames' range grew)";
+  } else {
+    if (grown) {
+      report.message += "; voxel " + format_number(grown->voxel_size_m) + " -> " +
+                        format_number(voxel_size_m_) + " m (the frames' range grew)";
+    }
+    add_to_whole_map(cropped, map_frame, report.T_first_frame);
   }
   const Eigen::Matrix4d T = finish(report, map_frame, started);
   if (!report.failed) {

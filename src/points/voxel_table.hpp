@@ -72,6 +72,10 @@ class VoxelSlots {
     return last_slot_;
   }
 
+  // The number of keys, and the bytes the table holds.
+  [[nodiscard]] std::size_t size() const noexcept { return size_; }
+  [[nodiscard]] std::size_t bytes() const noexcept { return entries_.size() * sizeof(Entry); }
+
   // The slot of `key`, or kNone: read-only, so that threads can look up at once.
   [[nodiscard]] std::size_t find(const VoxelKey& key) const {
     const std::size_t mask = entries_.size() - 1;

@@ -149,6 +149,24 @@ def test_the_map_as_an_array():
         odometry.map_cloud(voxel_size=float("nan"))
 
 
+def test_the_whole_map_keeps_what_the_local_map_drops():
+    clouds, _ = sequence(8)
+    odometry = sgd_icp.Odometry(max_range=6.0)
+    assert odometry.whole_map().shape == (0, 3)
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="voxel size"):
+        odometry.keep_whole_map(voxel_size=-1.0)
+    odometry.keep_whole_map(voxel_size=0.2)
+    for cloud in clouds:
+        odometry.register_frame(cloud)
+    whole = odometry.whole_map()
+    assert whole.dtype == np.float32 and np.isfinite(whole).all()
+    # One point per 0.2 m voxel, and more of them than the local map, which forgot the first
+    # frames' far side.
+    keys = np.floor(whole.astype(np.float64) / 0.2).astype(np.int64)
+    assert len(np.unique(keys, axis=0)) == len(whole)
+    assert len(whole) > len(odometry.map_cloud(voxel_size=0.2))
+
+
 def test_keywords_are_the_cli_options():
     odometry = sgd_icp.Odometry(method="icp", voxel_size=0.5, max_points_per_voxel=5, max_iterations=30)
     assert odometry.method == "icp"

@@ -30,6 +30,7 @@
 #include "sgdicp/core/enum_names.hpp"
 #include "sgdicp/core/point_cloud.hpp"
 #include "sgdicp/odometry/voxel_map.hpp"
+#include "sgdicp/odometry/whole_map.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/settings.hpp"
 
@@ -260,6 +261,18 @@ class Odometry {
   /// The map's points (the first frame's coordinates, metres), thinned to one centroid per voxel
   /// of voxel_size_m when it is above 0; empty before the first frame with points.
   [[nodiscard]] PointCloud map_cloud(double voxel_size_m = 0.0) const;
+  /// From the next frame on, keeps the whole map: every registered frame's points (cropped to the
+  /// range limits) in the first frame's coordinates, one centroid per voxel of voxel_size_m (0 =
+  /// the odometry's voxel, regridded with it when it grows; whole_map.hpp). On a voxel no finer
+  /// than 3/4 of the odometry's, the frame enters as thinned for the local map (the centroids of
+  /// its 3/4-voxel grid); on a finer one, at full resolution.
+  /// Lost frames do not enter it. Throws InvalidSettingsError for a negative or non-finite size.
+  void keep_whole_map(double voxel_size_m = 0.0);
+  /// The whole map kept since keep_whole_map (nullptr before it was asked for or before the first
+  /// frame with points).
+  [[nodiscard]] const WholeMap* whole_map() const noexcept {
+    return whole_map_ ? &*whole_map_ : nullptr;
+  }
   /// Frames lost (no start registered them, or unreadable) and recovered (registered by a retry).
   [[nodiscard]] std::size_t lost_frames() const noexcept;
   [[nodiscard]] std::size_t recovered_frames() const noexcept;
@@ -332,6 +345,10 @@ class Odometry {
   /// Why the global registration does not confirm a wide-basin one ("" = confirmed).
   [[nodiscard]] std::string unconfirmed(const Attempt& wide, const Attempt& global) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
+  /// Adds the registered frame (cropped, or its map_frame thinning) at pose T to the whole map,
+  /// when one is kept.
+  void add_to_whole_map(const PointCloud& cropped, const PointCloud& map_frame,
+                        const Eigen::Matrix4d& T);
   /// Adds the frame's points at pose T, with the normals or covariances the cost needs.
   void add_to_map(const PointCloud& frame, const Eigen::Matrix4d& T);
   [[nodiscard]] CostType cost() const;
@@ -348,6 +365,8 @@ class Odometry {
   double voxel_size_m_ = 0.0;
   std::vector<double> ranges_m_;  ///< of the first and the last registered frames (grow_voxel)
   std::optional<VoxelMap> map_;
+  std::optional<double> whole_map_voxel_m_;  ///< keep_whole_map's size (0 = the odometry's voxel)
+  std::optional<WholeMap> whole_map_;
   std::optional<AdaptiveThreshold> threshold_;
   MotionModel motion_;
   Eigen::Matrix4d T_last_good_ = Eigen::Matrix4d::Identity();  ///< last registered frame's pose
