@@ -75,5 +75,6 @@ nlohmann::json result_to_json(const RegistrationResult& r);
 void add_register_command(CLI::App& app);
 void add_bench_command(CLI::App& app);
 void add_odometry_command(CLI::App& app);
+void add_localize_command(CLI::App& app);
 
 }  // namespace sgdicp::cli

@@ -32,6 +32,19 @@ inline constexpr CommonOption kMaxDistanceBrief{"max-distance",
                                                 "Correspondence distance d_max, scaled or m"};
 inline constexpr CommonOption kIntrinsicsBrief{
     "intrinsics", "Pinhole intrinsics of .png depth images: a 3x3 K file or fx,fy,cx,cy"};
+// Of the commands over a folder of frames (odometry, localize).
+inline constexpr CommonOption kGroundTruthBrief{
+    "ground-truth", "Reference poses (KITTI, TUM, a 7-Scenes folder): prints RPE, ATE, drift"};
+inline constexpr CommonOption kReportBrief{
+    "report", "Write one CSV row per frame (start, time, inliers, failure)"};
+inline constexpr CommonOption kCovariancesBrief{
+    "covariances-out", "Write each frame's 6x6 covariance (with --uncertainty)"};
+inline constexpr CommonOption kMaxRangeBrief{"max-range",
+                                             "Points farther from the sensor are dropped, m"};
+inline constexpr CommonOption kThreadsBrief{"threads",
+                                            "Threads of each frame's registration, 0 = every core"};
+inline constexpr CommonOption kUncertaintyBrief{
+    "uncertainty", "Each frame's covariance: none, laplace, sgld, svgd"};
 
 /// Lays out `command`'s help: with --help, the options in `common` under "Options" and the others
 /// hidden; with --help-all, every option with its whole help, in the group of the part that reads

@@ -25,7 +25,9 @@
 #include "sgdicp/io/frame_source.hpp"
 #include "sgdicp/io/io.hpp"
 #include "sgdicp/io/trajectory_io.hpp"
+#include "sgdicp/io/transform_io.hpp"
 #include "sgdicp/metrics/trajectory_metrics.hpp"
+#include "sgdicp/odometry/localizer.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/tools/render.hpp"
 
@@ -43,6 +45,9 @@ struct OdometryOptions {
   std::string covariances_out;
   std::string map_out;
   double map_voxel_m = 0.0;
+  // sgdicp localize: the map to localize in, and the first frame's pose in it ("global": none).
+  std::string localize_in;
+  std::string init = "global";
   bool ground_truth_prefix = false;
   double rate_hz = 0.0;
   std::size_t max_frames = 0;
@@ -406,9 +411,15 @@ void check_map_options(const OdometryOptions& o) {
   }
 }
 
-// The local map's size, and the whole map's when one is kept (--map-out).
-std::string map_summary(const Odometry& odometry) {
+// The local map's size, and the whole map's when one is kept (--map-out); the fixed map's, and
+// its build time, when localizing.
+std::string map_summary(const OdometryOptions& o, const Odometry& odometry) {
   const VoxelMap* local = odometry.map();
+  if (!o.localize_in.empty()) {  // run() made a Localizer
+    return "map: " + std::to_string(local ? local->size() : 0) + " points in " +
+           std::to_string(local ? local->voxels() : 0) + " voxels, built in " +
+           format_number(static_cast<const Localizer&>(odometry).map_build_ms()) + " ms";
+  }
   std::string out = "local map: " + std::to_string(local ? local->size() : 0) + " points in " +
                     std::to_string(local ? local->voxels() : 0) + " voxels";
   if (const WholeMap* whole = odometry.whole_map()) {
@@ -435,7 +446,7 @@ void print_run_summary(const OdometryOptions& o, const std::string& method,
             << ", time per frame: median " << median_of(times_ms) << " ms, max "
             << (times_ms.empty() ? 0.0 : *std::max_element(times_ms.begin(), times_ms.end()))
             << " ms, " << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
-            << map_summary(odometry) << '\n'
+            << map_summary(o, odometry) << '\n'
             << "poses: " << o.poses_out << (o.tum.empty() ? "" : ", TUM: " + o.tum)
             << (o.covariances_out.empty() ? "" : ", covariances: " + o.covariances_out)
             << (o.map_out.empty() ? "" : ", map: " + o.map_out) << '\n';
@@ -455,6 +466,23 @@ void evaluate_and_draw(const OdometryOptions& o, const std::vector<Eigen::Matrix
     render_trajectories_png(o.picture, poses, {}, Eigen::Matrix4d::Identity());
   }
   if (!o.picture.empty()) std::cout << "picture: " << o.picture << '\n';
+}
+
+// --init: "global" (none: the global registration places the first frame), or a pose file.
+std::optional<Eigen::Matrix4d> first_pose_in_map(const OdometryOptions& o) {
+  if (o.init == "global") return std::nullopt;
+  try {
+    return read_transform(o.init);
+  } catch (const Error& e) {
+    throw InvalidInputError("--init " + o.init + " (a pose file, or 'global'): " + e.what());
+  }
+}
+
+// The map of `sgdicp localize`, read before any frame.
+PointCloud read_map(const OdometryOptions& o) {
+  ReadResult read = read_point_cloud(o.localize_in);
+  if (read.cloud.empty()) throw InvalidInputError(o.localize_in + ": the map has no point");
+  return std::move(read.cloud);
 }
 
 void run(const OdometryOptions& o) {
@@ -478,7 +506,16 @@ void run(const OdometryOptions& o) {
   if (!o.ground_truth.empty()) truth = load_ground_truth(o, source, frames);
 
   return_large_buffers_at_free();
-  Odometry odometry(settings, method.name, method.sgd, method.batch);
+  // Localize: the same pipeline with its map fixed (localizer.hpp).
+  std::optional<Odometry> tracking;
+  std::optional<Localizer> localizing;
+  if (o.localize_in.empty()) {
+    tracking.emplace(settings, method.name, method.sgd, method.batch);
+  } else {
+    localizing.emplace(read_map(o), first_pose_in_map(o), settings, method.name, method.sgd,
+                       method.batch);
+  }
+  Odometry& odometry = tracking ? *tracking : *localizing;
   if (!o.map_out.empty()) odometry.keep_whole_map(o.map_voxel_m);
   FrameWriters writers(o, tum_timestamps_s(source, frames, rate_hz));
   const StopOnSignal stop;
@@ -512,6 +549,62 @@ void run(const OdometryOptions& o) {
 
 }  // namespace
 
+namespace {
+
+// The options `odometry` and `localize` share: the frames, what is written per frame, the
+// evaluation, the odometry's and the registration's settings.
+void add_frame_options(CLI::App& cmd, const std::shared_ptr<OdometryOptions>& o) {
+  cmd.add_option("INPUT", o->input,
+                 "Folder of frames, sorted by name: point clouds of one format (.pcd .ply .bin "
+                 ".xyz .txt .csv .vtk .f32), a KITTI sequence folder (velodyne/*.bin, "
+                 "times.txt), or a 7-Scenes folder (frame-NNNNNN.depth.png, "
+                 "camera-intrinsics.txt)")
+      ->required();
+  cmd.add_option("--poses-out", o->poses_out,
+                 "Write the trajectory here, frame by frame as the run goes: one line per frame, "
+                 "the 3x4 row-major pose (KITTI format): T_first_frame for odometry (the first "
+                 "line is the identity), T_map_frame for localize")
+      ->required();
+  cmd.add_option("--tum", o->tum,
+                 "Also write the trajectory in the TUM format (timestamp tx ty tz qx qy qz qw), "
+                 "timestamps from the source when known, else frame / --rate");
+  cmd.add_option("--rate", o->rate_hz,
+                 "Frame rate for TUM timestamps when the source has none, Hz [default: 0 = the "
+                 "layout's: 7-Scenes and TUM 30, else 10]");
+  cmd.add_option("--ground-truth", o->ground_truth,
+                 "Ground-truth poses, one per frame: a KITTI poses file (12 numbers per line), a "
+                 "TUM file (8 numbers per line; matched to the frames by timestamp within "
+                 "0.02 s when the frames have timestamps, as TUM's associate.py) or a 7-Scenes "
+                 "folder (frame-*.pose.txt); prints RPE, KITTI drift, ATE and end drift");
+  cmd.add_flag("--ground-truth-prefix", o->ground_truth_prefix,
+               "Compare with the first poses of a longer ground truth (a KITTI poses file of the "
+               "whole sequence for its first frames)");
+  cmd.add_option("--ground-truth-calib", o->ground_truth_calib,
+                 "KITTI calib.txt: the ground truth is of the camera, moved to the scanner with "
+                 "its Tr (velodyne to camera)");
+  cmd.add_option("--picture", o->picture,
+                 "Write a PNG (the name must end in .png) of the trajectory, seen along z (x-y) "
+                 "and along y (x-z), with the ground truth when given (the estimate aligned "
+                 "onto it as for the ATE)");
+  cmd.add_option("--report", o->report,
+                 "Write one CSV row per frame (failed, recovered, start, converged, iterations, "
+                 "points, overlap, inliers, threshold, times, message)");
+  cmd.add_option("--covariances-out", o->covariances_out,
+                 "Write each frame's pose covariance relative to the map (m, rad): one line of "
+                 "36 numbers, 6x6 row-major, nan for none; needs --uncertainty");
+  cmd.add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
+  cmd.add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
+  add_table_options(cmd, odometry_settings_table(), OdometrySettings{}, o->odometry_values);
+  cmd.add_option("--method", o->settings.method,
+                 "Registration step: " + method_list(", ") +
+                     " (methods of `sgdicp register`) "
+                     "[default: sgd]");
+  add_settings_options(cmd, o->settings, /*with_voxel_grid=*/false);
+  add_depth_options(cmd, o->depth);
+}
+
+}  // namespace
+
 void add_odometry_command(CLI::App& app) {
   auto o = std::make_shared<OdometryOptions>();
   CLI::App* cmd = app.add_subcommand(
@@ -523,44 +616,7 @@ void add_odometry_command(CLI::App& app) {
       "from the prediction and the last pose take Gauss-Newton steps unless --optimizer, "
       "--preconditioner or --learning-rate is given; giving --learning-rate keeps it uncapped "
       "(Adam and RMSProp steps are otherwise capped at d_max / 4).");
-  cmd->add_option("INPUT", o->input,
-                  "Folder of frames, sorted by name: point clouds of one format (.pcd .ply .bin "
-                  ".xyz .txt .csv .vtk .f32), a KITTI sequence folder (velodyne/*.bin, "
-                  "times.txt), or a 7-Scenes folder (frame-NNNNNN.depth.png, "
-                  "camera-intrinsics.txt)")
-      ->required();
-  cmd->add_option("--poses-out", o->poses_out,
-                  "Write the trajectory here, frame by frame as the run goes: one line per frame, "
-                  "the 3x4 row-major pose T_first_frame (KITTI format; the first line is the "
-                  "identity)")
-      ->required();
-  cmd->add_option("--tum", o->tum,
-                  "Also write the trajectory in the TUM format (timestamp tx ty tz qx qy qz qw), "
-                  "timestamps from the source when known, else frame / --rate");
-  cmd->add_option("--rate", o->rate_hz,
-                  "Frame rate for TUM timestamps when the source has none, Hz [default: 0 = the "
-                  "layout's: 7-Scenes and TUM 30, else 10]");
-  cmd->add_option("--ground-truth", o->ground_truth,
-                  "Ground-truth poses, one per frame: a KITTI poses file (12 numbers per line), a "
-                  "TUM file (8 numbers per line; matched to the frames by timestamp within "
-                  "0.02 s when the frames have timestamps, as TUM's associate.py) or a 7-Scenes "
-                  "folder (frame-*.pose.txt); prints RPE, KITTI drift, ATE and end drift");
-  cmd->add_flag("--ground-truth-prefix", o->ground_truth_prefix,
-                "Compare with the first poses of a longer ground truth (a KITTI poses file of the "
-                "whole sequence for its first frames)");
-  cmd->add_option("--ground-truth-calib", o->ground_truth_calib,
-                  "KITTI calib.txt: the ground truth is of the camera, moved to the scanner with "
-                  "its Tr (velodyne to camera)");
-  cmd->add_option("--picture", o->picture,
-                  "Write a PNG (the name must end in .png) of the trajectory, seen along z (x-y) "
-                  "and along y (x-z), with the ground truth when given (the estimate aligned "
-                  "onto it as for the ATE)");
-  cmd->add_option("--report", o->report,
-                  "Write one CSV row per frame (failed, recovered, start, converged, iterations, "
-                  "points, overlap, inliers, threshold, times, message)");
-  cmd->add_option("--covariances-out", o->covariances_out,
-                  "Write each frame's pose covariance relative to the map (m, rad): one line of "
-                  "36 numbers, 6x6 row-major, nan for none; needs --uncertainty");
+  add_frame_options(*cmd, o);
   cmd->add_option("--map-out", o->map_out,
                   "Write the whole map at the end, or when a signal stops the run: every "
                   "registered frame's points in the first frame's coordinates, metres, one "
@@ -568,32 +624,58 @@ void add_odometry_command(CLI::App& app) {
   cmd->add_option("--map-voxel", o->map_voxel_m,
                   "Voxel of the written map: one centroid per voxel of this side, m [default: 0 = "
                   "the odometry's voxel]");
-  cmd->add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
-  cmd->add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
-  add_table_options(*cmd, odometry_settings_table(), OdometrySettings{}, o->odometry_values);
-  cmd->add_option("--method", o->settings.method,
-                  "Registration step: " + method_list(", ") +
-                      " (methods of `sgdicp register`) "
-                      "[default: sgd]");
-  add_settings_options(*cmd, o->settings, /*with_voxel_grid=*/false);
-  add_depth_options(*cmd, o->depth);
   // What a user of the command sets; every other option is in --help-all.
   static constexpr std::array<CommonOption, 13> kCommon{
       {{"poses-out", "Write each frame's pose here as the run goes (KITTI 3x4 format)"},
        {"tum", "Also write the trajectory in the TUM format"},
-       {"ground-truth", "Reference poses (KITTI, TUM, a 7-Scenes folder): prints RPE, ATE, drift"},
-       {"report", "Write one CSV row per frame (start, time, inliers, failure)"},
-       {"covariances-out", "Write each frame's 6x6 covariance (with --uncertainty)"},
+       kGroundTruthBrief,
+       kReportBrief,
+       kCovariancesBrief,
        {"map-out", "Write the whole map at the end (PLY, PCD or XYZ)"},
        {"quiet", ""},
        kMethodBrief,
        {"voxel-size", "Map voxel side, m; 0 = from the first frame's range"},
-       {"max-range", "Points farther from the sensor are dropped, m"},
-       {"threads", "Threads of each frame's registration, 0 = every core"},
-       {"uncertainty", "Each frame's covariance: none, laplace, sgld, svgd"},
+       kMaxRangeBrief,
+       kThreadsBrief,
+       kUncertaintyBrief,
        kIntrinsicsBrief}};
   arrange_help(*cmd, kCommon);
   cmd->callback([o] { run(*o); });
+}
+
+void add_localize_command(CLI::App& app) {
+  auto o = std::make_shared<OdometryOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "localize",
+      "Localization in a map made before: each frame of a folder registered to a fixed map (a "
+      "point cloud: an odometry run's --map-out, or any PLY/PCD map), never extended. The first "
+      "frame is placed by the global registration (or --init); every later one from the motion "
+      "model's prediction, with the odometry's retries. A frame the map does not hold is "
+      "reported lost, not placed. Writes each frame's pose in the map's coordinates "
+      "(docs/odometry.md, Localization).");
+  cmd->add_option("MAP", o->localize_in, "The map: a point cloud file (PLY, PCD, ...), metres")
+      ->required();
+  add_frame_options(*cmd, o);
+  cmd->add_option("--init", o->init,
+                  "The first frame's pose in the map: a file with a 4x4 or 3x4 transform, or "
+                  "'global' (the global registration finds it) [default: global]");
+  static constexpr std::array<CommonOption, 11> kCommon{
+      {{"poses-out", "Write each frame's pose in the map here as the run goes (KITTI 3x4)"},
+       {"init", "The first frame's pose in the map (a 4x4 file), or 'global'"},
+       kGroundTruthBrief,
+       kReportBrief,
+       kCovariancesBrief,
+       {"quiet", ""},
+       kMethodBrief,
+       kMaxRangeBrief,
+       kThreadsBrief,
+       kUncertaintyBrief,
+       kIntrinsicsBrief}};
+  arrange_help(*cmd, kCommon);
+  cmd->callback([o] {
+    if (o->init.empty()) throw InvalidSettingsError("--init: a pose file, or 'global'");
+    run(*o);
+  });
 }
 
 }  // namespace sgdicp::cli

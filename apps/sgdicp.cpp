@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   sgdicp::cli::add_register_command(app);
   sgdicp::cli::add_bench_command(app);
   sgdicp::cli::add_odometry_command(app);
+  sgdicp::cli::add_localize_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -252,4 +252,46 @@ if [ -d "$BALM" ] && [ -d "$SHARED/kitti_odometry_seq00/velodyne" ]; then
 else
   echo "SKIP: hostile and interrupted runs (no $BALM or KITTI scans)"
 fi
+
+# sgdicp localize: a map written by odometry over the hand-held LiDAR's even scans 0-20, its odd
+# scans 1-19 localized in it (the first by the global registration, or from --init), a KITTI scan
+# among them lost; then maps and poses it cannot use.
+if [ -d "$BALM" ] && [ -d "$SHARED/kitti_odometry_seq00/velodyne" ]; then
+  mkdir -p "$tmp/even" "$tmp/odd"
+  ls "$BALM" | sort | head -21 >"$tmp/first"
+  i=0
+  while read -r name; do
+    if [ $((i % 2)) -eq 0 ]; then ln -s "$BALM/$name" "$tmp/even/$name"; else ln -s "$BALM/$name" "$tmp/odd/$name"; fi
+    i=$((i + 1))
+  done <"$tmp/first"
+  awk 'NR % 2 == 0 && NR <= 20' "$SHARED/balm_handheld_lidar/poses.txt" >"$tmp/odd_truth.txt"
+  run odometry "$tmp/even" --poses-out "$tmp/even.txt" --map-out "$tmp/even_map.ply" --map-voxel 0.05 -q
+  run localize "$tmp/even_map.ply" "$tmp/odd" --poses-out "$tmp/odd.txt" --report "$tmp/odd.csv" \
+    --ground-truth "$tmp/odd_truth.txt"
+  rpe=$(grep -o 'RPE per frame.*translation RMSE [0-9.e-]*' "$tmp/out" | grep -o '[0-9.e-]*$')
+  if [ "$rc" -eq 0 ] && [ "$(grep -c . "$tmp/odd.txt")" -eq 10 ] && grep -q 'frames: 10, lost: 0' "$tmp/out" &&
+    grep -q 'built in' "$tmp/out" && grep -q '^0,[^,]*,0,0,global,' "$tmp/odd.csv" &&
+    awk -v r="${rpe:-1}" 'BEGIN { exit !(r < 0.03) }'; then
+    pass "localize: the odd scans placed in the even scans' map (first by the global registration), RPE $rpe m"
+  else
+    fail "localize (exit $rc, RPE ${rpe:-none}): $(head -c 600 "$tmp/out") $(head -c 400 "$tmp/err")"
+  fi
+  # --init: the first odd scan's pose from the run above; then a KITTI scan among the frames.
+  head -1 "$tmp/odd.txt" >"$tmp/init.txt"
+  ln -s "$SHARED/kitti_odometry_seq00/velodyne/000000.bin" "$tmp/odd/000105_kitti.bin"
+  run localize "$tmp/even_map.ply" "$tmp/odd" --poses-out "$tmp/odd2.txt" --report "$tmp/odd2.csv" \
+    --init "$tmp/init.txt" -q
+  if [ "$rc" -eq 0 ] && grep -q '^0,[^,]*,0,0,prediction,' "$tmp/odd2.csv" &&
+    grep -q ',000105_kitti.bin,1,' "$tmp/odd2.csv" && grep -q 'frames: 11, lost: 1' "$tmp/out"; then
+    pass "localize --init starts from the pose given; a KITTI scan among the frames is lost, not placed"
+  else
+    fail "localize --init / a KITTI scan (exit $rc): $(head -c 600 "$tmp/out") $(grep kitti "$tmp/odd2.csv" | head -c 300)"
+  fi
+  expect_error "localize in a missing map" 'no_map.ply' localize "$tmp/no_map.ply" "$tmp/odd" --poses-out "$tmp/x.txt"
+  printf 'nan nan nan\n' >"$tmp/empty.xyz"
+  expect_error "localize in a map of no finite point" 'no point' localize "$tmp/empty.xyz" "$tmp/odd" --poses-out "$tmp/x.txt"
+  expect_error "localize --init of a bad file" '--init' localize "$tmp/even_map.ply" "$tmp/odd" --poses-out "$tmp/x.txt" --init "$tmp/odd.csv"
+else
+  echo "SKIP: localize (no $BALM or KITTI scans)"
+fi
 finish

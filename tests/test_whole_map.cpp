@@ -63,8 +63,9 @@ TEST(WholeMap, APlaceSeenAgainAddsNoVoxel) {
 TEST(WholeMap, RegridMergesCentroidsByTheirWeight) {
   WholeMap map(0.5);
   // Three points in voxel (0, 0, 0) at x 0.1, one in (1, 0, 0) at x 0.7 (0.5 m voxels).
-  map.add(cloud_of({{0.1F, 0.1F, 0.1F}, {0.1F, 0.1F, 0.1F}, {0.1F, 0.1F, 0.1F}, {0.7F, 0.1F, 0.1F}}),
-          Eigen::Matrix4d::Identity());
+  map.add(
+      cloud_of({{0.1F, 0.1F, 0.1F}, {0.1F, 0.1F, 0.1F}, {0.1F, 0.1F, 0.1F}, {0.7F, 0.1F, 0.1F}}),
+      Eigen::Matrix4d::Identity());
   ASSERT_EQ(map.size(), 2U);
   EXPECT_THROW(map.regrid(0.25), InvalidSettingsError);
   map.regrid(1.0);
@@ -103,11 +104,11 @@ TEST(Odometry, TheWholeMapKeepsEveryRegisteredFrameAndNoLostOne) {
   PointCloud stranger;  // a ball of points 2 m wide: nothing like the room, lost
   std::mt19937_64 rng(3);
   for (int i = 0; i < 6000; ++i) {
-    stranger.points.emplace_back(
-        Eigen::Vector3d(test::uniform(rng, -1, 1), test::uniform(rng, -1, 1),
-                        test::uniform(rng, -1, 1))
-            .normalized()
-            .cast<float>());
+    stranger.points.emplace_back(Eigen::Vector3d(test::uniform(rng, -1, 1),
+                                                 test::uniform(rng, -1, 1),
+                                                 test::uniform(rng, -1, 1))
+                                     .normalized()
+                                     .cast<float>());
   }
   for (std::size_t f = 0; f < seq.frames.size(); ++f) {
     if (f == 5) {

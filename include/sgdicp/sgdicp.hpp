@@ -19,6 +19,7 @@
 #include "sgdicp/io/transform_io.hpp"
 #include "sgdicp/metrics/metrics.hpp"
 #include "sgdicp/metrics/trajectory_metrics.hpp"
+#include "sgdicp/odometry/localizer.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 #include "sgdicp/odometry/voxel_map.hpp"
 #include "sgdicp/odometry/whole_map.hpp"

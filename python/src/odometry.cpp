@@ -212,13 +212,12 @@ void bind_odometry(py::module_& m) {
           "max_range of the last pose), an (N, 3) float32 array in the first frame's coordinates "
           "(metres), thinned to one centroid per voxel of voxel_size metres when above 0. The "
           "whole map: whole_map().")
-      .def(
-          "keep_whole_map", &Odometry::keep_whole_map, "voxel_size"_a = 0.0,
-          "From the next frame on, keeps the whole map: every registered frame's points in the "
-          "first frame's coordinates, one centroid per voxel of voxel_size metres (0 = the "
-          "odometry's voxel, following it when it grows), as `sgdicp odometry --map-out "
-          "--map-voxel` writes it. Lost frames do not enter it; its memory grows with the space "
-          "covered, not with the frames.")
+      .def("keep_whole_map", &Odometry::keep_whole_map, "voxel_size"_a = 0.0,
+           "From the next frame on, keeps the whole map: every registered frame's points in the "
+           "first frame's coordinates, one centroid per voxel of voxel_size metres (0 = the "
+           "odometry's voxel, following it when it grows), as `sgdicp odometry --map-out "
+           "--map-voxel` writes it. Lost frames do not enter it; its memory grows with the space "
+           "covered, not with the frames.")
       .def(
           "whole_map",
           [](const Odometry& o) {

@@ -201,7 +201,43 @@ void Odometry::start(double range_m) {
   voxel_size_m_ =
       settings_.voxel_size_m > 0.0 ? settings_.voxel_size_m : std::max(kVoxelShare * range_m, 1e-3);
   map_.emplace(voxel_size_m_, settings_.max_points_per_voxel);
+  if (localizing_) build_fixed_map();
   start_threshold();
+}
+
+void Odometry::fix_map(PointCloud map, std::optional<Eigen::Matrix4d> T_map_first_frame) {
+  if (!poses_.empty()) throw std::logic_error("Odometry::fix_map after the first frame");
+  const bool any_finite = std::any_of(map.points.begin(), map.points.end(),
+                                      [](const Eigen::Vector3f& p) { return p.allFinite(); });
+  if (!any_finite) throw InvalidInputError("the map to localize in has no finite point");
+  if (!map.origin_m.isZero()) {
+    throw InvalidInputError(
+        "the map to localize in is georeferenced (coordinates beyond 16 km): not supported yet; "
+        "move it near its origin first");
+  }
+  if (T_map_first_frame && !T_map_first_frame->allFinite()) {
+    throw InvalidInputError("the first frame's pose in the map is not finite");
+  }
+  fixed_map_ = std::move(map);
+  T_map_first_frame_ = T_map_first_frame;
+  localizing_ = true;
+}
+
+// The map's points into the voxels (the local map's admission rule: at most N per voxel, spaced),
+// with the surfaces the cost reads, estimated on the whole map: built once, never changed.
+void Odometry::build_fixed_map() {
+  const double started = now_ms();
+  const PointCloud cloud = std::move(*fixed_map_);
+  fixed_map_.reset();
+  const bool covariances = needs_covariances(cost());
+  if (!covariances && !needs_reference_normals(cost())) {
+    map_->add(cloud);
+  } else {
+    NeighborhoodSettings surfaces = neighborhood();
+    surfaces.num_threads = threads();
+    map_->add(subset_with_surfaces(cloud, map_->admitted(cloud), surfaces, covariances));
+  }
+  fixed_map_build_ms_ = now_ms() - started;
 }
 
 void Odometry::start_threshold() {
@@ -213,8 +249,8 @@ void Odometry::start_threshold() {
 }
 
 Eigen::Matrix4d Odometry::predicted() const {
-  return poses_.empty() ? Eigen::Matrix4d::Identity()
-                        : Eigen::Matrix4d(poses_.back() * motion_.predicted());
+  if (poses_.empty()) return T_map_first_frame_.value_or(Eigen::Matrix4d::Identity());
+  return poses_.back() * motion_.predicted();
 }
 
 PointCloud Odometry::map_cloud(double voxel_size_m) const {
@@ -225,8 +261,9 @@ PointCloud Odometry::map_cloud(double voxel_size_m) const {
 
 void Odometry::keep_whole_map(double voxel_size_m) {
   if (!(voxel_size_m >= 0.0 && std::isfinite(voxel_size_m))) {
-    throw InvalidSettingsError("whole map: voxel size must be 0 (the odometry's) or positive, got " +
-                               format_number(voxel_size_m) + " m");
+    throw InvalidSettingsError(
+        "whole map: voxel size must be 0 (the odometry's) or positive, got " +
+        format_number(voxel_size_m) + " m");
   }
   whole_map_voxel_m_ = voxel_size_m;
   whole_map_.reset();
@@ -316,6 +353,9 @@ Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double ran
                                            std::optional<VoxelBefore>& grown, FrameReport& report,
                                            double started) {
   const PointCloud map_frame = voxel_downsample(cropped, kMapThinning * voxel_size_m_, threads());
+  if (map_->empty() && localizing_) {
+    throw InvalidInputError("the map to localize in has no finite point");
+  }
   if (map_->empty()) {  // the first frame with points: it defines the map
     report.converged = true;
     if (with_uncertainty()) report.covariance.setZero();  // exact: it defines the coordinates
@@ -456,8 +496,11 @@ std::string Odometry::judge(const RegistrationResult& r, double overlap, double 
   const Eigen::Matrix4d motion = rigid_inverse(T_last_good_) * r.T_reference_source;
   const double step_m = motion.topRightCorner<3, 1>().norm();
   const double turn_deg = rotation_angle_rad(motion) * 180.0 / std::numbers::pi;
-  if (!r.T_reference_source.allFinite() || step_m > frames * bound_m ||
-      turn_deg > std::min(180.0, frames * settings_.max_rotation_per_frame_deg)) {
+  // Before a frame is registered in a fixed map there is no motion to bound.
+  const bool bounded = registered_any_;
+  if (!r.T_reference_source.allFinite() ||
+      (bounded && (step_m > frames * bound_m ||
+                   turn_deg > std::min(180.0, frames * settings_.max_rotation_per_frame_deg)))) {
     return "motion beyond the bounds per frame: " + format_number(step_m) + " m, " +
            format_number(turn_deg) + " deg";
   }
@@ -526,7 +569,7 @@ std::string Odometry::unconfirmed(const Attempt& wide, const Attempt& global) co
 // 7-Scenes frames grew the voxel to 0.57 m and lost all the frames after it. Returns what it
 // replaced (nothing when the voxel did not grow).
 std::optional<Odometry::VoxelBefore> Odometry::grow_voxel(double range_m) {
-  if (settings_.voxel_size_m > 0.0) return std::nullopt;
+  if (settings_.voxel_size_m > 0.0 || localizing_) return std::nullopt;  // a fixed map stays
   std::vector<double> ranges = ranges_m_;
   ranges.push_back(range_m);
   const double voxel_m = kVoxelShare * median_of(std::move(ranges));
@@ -556,8 +599,7 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
   // The global start comes before the wide basin: it costs less (0.13-0.18 s against 0.2-0.5 s
   // on the hand-held LiDAR) and its answer is what confirms the wide basin's anyway; the wide
   // basin runs when the global answer is not taken as it is.
-  for (const FrameStart start : {FrameStart::prediction, FrameStart::last_pose, FrameStart::global,
-                                 FrameStart::wide_basin}) {
+  for (const FrameStart start : starts()) {
     const Eigen::Matrix4d T_guess = start == FrameStart::prediction ? T_prediction : T_last_good_;
     if (start == FrameStart::last_pose && T_guess.isApprox(T_prediction)) continue;
     Attempt a = attempt(source, index, sigma, range_m, T_guess, start);
@@ -582,7 +624,12 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
     }
     reject(start, a.why);
   }
-  if (doubtful) {
+  // Odometry takes the best of doubtful registrations (its map is the frames before); a fixed map
+  // may not cover what the frame sees, and a frame it does not hold is lost, not placed. Taking
+  // the best one with half the frame on the map placed 7-Scenes frames 364-464 (localized in a map
+  // of frames 0-299, seeing 29-69 % of it at their reference poses) 0.18-0.95 m off, with
+  // overlaps of 0.51-0.67 where the frames around scored 0.73-0.99.
+  if (doubtful && !localizing_) {
     accept(doubtful->first, doubtful->second, T_prediction, range_m, rejected, report);
     return;
   }
@@ -590,12 +637,24 @@ void Odometry::register_to_map(const PointCloud& source, const ReferenceIndex& i
   report.message = "lost (" + rejected + ")";
 }
 
+// Every start, but in a fixed map before any frame is registered: there, without a pose to start
+// from, the global registration alone; with one (fix_map), the frame from it, then the global one.
+std::vector<FrameStart> Odometry::starts() const {
+  if (!registered_any_ && localizing_) {
+    if (T_map_first_frame_) return {FrameStart::prediction, FrameStart::global};
+    return {FrameStart::global};
+  }
+  return {FrameStart::prediction, FrameStart::last_pose, FrameStart::global,
+          FrameStart::wide_basin};
+}
+
 void Odometry::accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d& T_prediction,
                       double range_m, const std::string& rejected, FrameReport& report) {
   const RegistrationResult& r = a.result;
   report.converged = true;
   report.start = start;
-  report.recovered = start != FrameStart::prediction;
+  // The first frame in a fixed map without a pose starts from the global registration by plan.
+  report.recovered = start != starts().front();
   report.overlap = a.overlap;
   report.inlier_ratio = r.inlier_ratio;
   report.inlier_rmse_m = r.inlier_rmse_m;
@@ -610,7 +669,8 @@ void Odometry::accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d&
   if (with_uncertainty()) report.covariance = r.covariance_se3;
   // Only registrations from the prediction sample how far it is off: a retry's start was not the
   // prediction.
-  if (!report.recovered)
+  // A first pose given in a fixed map (fix_map) is the user's, not a prediction.
+  if (!report.recovered && registered_any_)
     threshold_->update(rigid_inverse(T_prediction) * r.T_reference_source, range_m);
 }
 
@@ -654,7 +714,7 @@ Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame
   const Eigen::Matrix4d T = report.T_first_frame;
   // The map first: it is what can throw (register_frame then fails the frame, and nothing of the
   // state below has taken it in).
-  if (map_ && !map_frame.empty()) {
+  if (map_ && !map_frame.empty() && !localizing_) {
     // A lost frame is not added: its pose is a guess, and the map must stay consistent.
     if (!report.failed || map_->empty()) add_to_map(map_frame, T);
     map_->remove_far_from(T.topRightCorner<3, 1>(), settings_.max_range_m);
@@ -662,12 +722,13 @@ Eigen::Matrix4d Odometry::finish(FrameReport report, const PointCloud& map_frame
   if (!report.failed) {
     // The motion model learns only from two registered frames in a row: across lost frames the
     // motion per frame is unknown, so the next prediction is the pose itself.
-    if (lost_since_good_ == 0 && !poses_.empty()) {
+    if (lost_since_good_ == 0 && registered_any_) {
       motion_.update(rigid_inverse(T_last_good_) * T);
     } else {
       motion_.forget_last();
     }
     T_last_good_ = T;
+    registered_any_ = true;
     lost_since_good_ = 0;
     if (report.overlap > 0.0) {
       overlaps_.push_back(report.overlap);

@@ -281,7 +281,20 @@ class Odometry {
   [[nodiscard]] double voxel_size_m() const noexcept { return voxel_size_m_; }
   [[nodiscard]] std::string_view method() const noexcept { return method_->name; }
 
+ protected:
+  /// Localization (Localizer, localizer.hpp): the map is `map` (its own coordinates), built into
+  /// the map's voxels at the first frame and never changed; the first frame starts from
+  /// T_map_first_frame, or from the global registration without one; a frame whose best
+  /// registration overlaps the map doubtfully is lost, not placed. Before the first frame only.
+  void fix_map(PointCloud map, std::optional<Eigen::Matrix4d> T_map_first_frame);
+  /// The time it took to build the fixed map into its voxels, with its surfaces (0 before).
+  [[nodiscard]] double fixed_map_build_ms() const noexcept { return fixed_map_build_ms_; }
+
  private:
+  /// Builds the fixed map into map_ (fix_map), timing it.
+  void build_fixed_map();
+  /// The starts of a frame's registration, in the order they are tried.
+  [[nodiscard]] std::vector<FrameStart> starts() const;
   /// The map and the threshold for the first frame with points, whose range is range_m.
   void start(double range_m);
   /// The adaptive threshold anew, its derived lengths from the voxel in use.
@@ -367,6 +380,11 @@ class Odometry {
   std::optional<VoxelMap> map_;
   std::optional<double> whole_map_voxel_m_;  ///< keep_whole_map's size (0 = the odometry's voxel)
   std::optional<WholeMap> whole_map_;
+  std::optional<PointCloud> fixed_map_;  ///< fix_map's cloud, until build_fixed_map takes it
+  bool localizing_ = false;              ///< the map is fixed (fix_map)
+  std::optional<Eigen::Matrix4d> T_map_first_frame_;
+  double fixed_map_build_ms_ = 0.0;
+  bool registered_any_ = false;  ///< a frame has been registered (T_last_good_ is a pose)
   std::optional<AdaptiveThreshold> threshold_;
   MotionModel motion_;
   Eigen::Matrix4d T_last_good_ = Eigen::Matrix4d::Identity();  ///< last registered frame's pose
