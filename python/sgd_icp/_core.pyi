@@ -1880,3 +1880,87 @@ class Odometry:
     def method(self) -> str:
         """The registration method's name."""
     def __len__(self) -> int: ...
+
+class Localizer(Odometry):
+    """Localization in a map made before: an Odometry whose map is fixed (never extended), the first
+    frame placed by the global registration (or from init), every later one from the motion
+    model's prediction; a frame the map does not hold is lost, not placed. Poses are in the map's
+    coordinates (docs/odometry.md, Localization).
+    """
+
+    def __init__(
+        self,
+        map: _Points,
+        init: _Transform | None = None,
+        method: str = "sgd",
+        *,
+        max_range: float = ...,
+        min_range: float = ...,
+        voxel_size: float = ...,
+        max_points_per_voxel: int = ...,
+        initial_threshold: float = ...,
+        min_motion: float = ...,
+        max_translation_per_frame: float = ...,
+        max_rotation_per_frame: float = ...,
+        optimizer: _OptimizerName = ...,
+        learning_rate: float = ...,
+        batch_size: int = ...,
+        cap_batch_to_source: bool = ...,
+        small_source_gauss_newton: bool = ...,
+        max_distance: _DistanceValue = ...,
+        max_distance_unit: _UnitName = ...,
+        max_iterations: int = ...,
+        seed: int = ...,
+        momentum: float = ...,
+        beta1: float = ...,
+        beta2: float = ...,
+        rms_decay: float = ...,
+        epsilon: float = ...,
+        hessian_decay: float = ...,
+        damping: float = ...,
+        window: int = ...,
+        chi2: float = ...,
+        path_efficiency: float = ...,
+        translation_tolerance: float = ...,
+        rotation_tolerance: float = ...,
+        refine_stages: int = ...,
+        step_decay: float = ...,
+        distance_factor: float = ...,
+        min_distance: _DistanceValue = ...,
+        refine_gauss_newton: bool = ...,
+        settle_tolerance: float = ...,
+        average: bool = ...,
+        scaling_origin: _OriginName = ...,
+        evaluation_points: int = ...,
+        cost: _CostName = ...,
+        coarse_cost: _CostName = ...,
+        kernel: _KernelName = ...,
+        kernel_scale: _DistanceValue = ...,
+        trim: float = ...,
+        neighbors: int = ...,
+        flat_neighbors: int = ...,
+        flatness: float = ...,
+        threads: int = ...,
+        robust_scaling: bool = ...,
+        record_trace: bool = ...,
+        uncertainty: _UncertaintyName = ...,
+        uncertainty_samples: int = ...,
+        burn_in: int = ...,
+        thinning: int = ...,
+        sgld_step: float = ...,
+        particles: int = ...,
+        svgd_iterations: int = ...,
+        svgd_step: float = ...,
+        svgd_spread: float = ...,
+        temper: bool = ...,
+        block_size: _DistanceValue = ...,
+    ) -> None:
+        """map: (N, 3) float32/float64 array of the map's points, metres. init: the first frame's
+        (4, 4) pose in the map, or None (the global registration places it). method and the
+        keywords: as Odometry's. Raises InvalidInputError for a map without a finite point or
+        georeferenced (coordinates beyond 16 km, not supported yet).
+        """
+    @property
+    def map_build_ms(self) -> float:
+        """The time the map's voxels and surfaces took to build (at the first frame), ms; 0 before.
+        """

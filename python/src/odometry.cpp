@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/odometry/localizer.hpp"
 #include "sgdicp/odometry/odometry.hpp"
 
 namespace sgdicp::python {
@@ -25,7 +26,15 @@ OdometrySettings take_odometry_keywords(py::dict& overrides) {
   return s;
 }
 
-Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
+// What Odometry's and Localizer's constructors take, from the method and the keywords.
+struct OdometryArguments {
+  OdometrySettings settings;
+  std::string method;
+  SgdSettings sgd;
+  BatchSettings batch;
+};
+
+OdometryArguments odometry_arguments(const std::string& method, const py::kwargs& kwargs) {
   py::dict overrides(kwargs);
   const OdometrySettings settings = take_odometry_keywords(overrides);
   // voxel_size= was taken as the map's; the registration's own grid has no place here.
@@ -56,7 +65,21 @@ Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
     }
     throw py::type_error(std::string(e.what()) + "; the odometry keywords: " + names);
   }
-  return Odometry(settings, m.name, sgd, batch);
+  return {settings, std::string(m.name), sgd, batch};
+}
+
+Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
+  const OdometryArguments a = odometry_arguments(method, kwargs);
+  return Odometry(a.settings, a.method, a.sgd, a.batch);
+}
+
+Localizer make_localizer(const py::handle& map, const py::object& init, const std::string& method,
+                         const py::kwargs& kwargs) {
+  ConvertedCloud cloud = cloud_from_array(map, "map", NonFinite::drop, /*allow_empty=*/true);
+  std::optional<Eigen::Matrix4d> T_map_first_frame;
+  if (!init.is_none()) T_map_first_frame = matrix_from_array(init, "init");
+  const OdometryArguments a = odometry_arguments(method, kwargs);
+  return Localizer(std::move(cloud.cloud), T_map_first_frame, a.settings, a.method, a.sgd, a.batch);
 }
 
 py::array_t<double> stacked(const std::vector<Eigen::Matrix4d>& poses) {
@@ -234,6 +257,23 @@ void bind_odometry(py::module_& m) {
           "method", [](const Odometry& o) { return std::string(o.method()); },
           "The registration method's name.")
       .def("__len__", [](const Odometry& o) { return o.poses().size(); });
+  py::class_<Localizer, Odometry>(
+      m, "Localizer",
+      "Localization in a map made before: an Odometry whose map is fixed (never extended), the "
+      "first frame placed by the global registration (or from init), every later one from the "
+      "motion model's prediction; a frame the map does not hold is lost, not placed. Poses are "
+      "in the map's coordinates (docs/odometry.md, Localization).")
+      .def(py::init(
+               [](const py::handle& map, const py::object& init, const std::string& method,
+                  const py::kwargs& kwargs) { return make_localizer(map, init, method, kwargs); }),
+           "map"_a, "init"_a = py::none(), "method"_a = "sgd",
+           "map: (N, 3) float32/float64 array of the map's points, metres. init: the first "
+           "frame's (4, 4) pose in the map, or None (the global registration places it). method "
+           "and the keywords: as Odometry's. Raises InvalidInputError for a map without a finite "
+           "point or georeferenced (coordinates beyond 16 km, not supported yet).")
+      .def_property_readonly("map_build_ms", &Localizer::map_build_ms,
+                             "The time the map's voxels and surfaces took to build (at the first "
+                             "frame), ms; 0 before.");
 }
 
 }  // namespace sgdicp::python

@@ -40,10 +40,14 @@ SIGNATURES: dict[str, tuple[str, ...]] = {
     "register": ("sgd", "batch", "global"),
     "ReferenceIndex.for_registration": ("sgd", "batch", "global"),
     "Odometry.__init__": ("odometry", "sgd", "batch"),
+    "Localizer.__init__": ("odometry", "sgd", "batch"),
 }
 # Keywords of those tables a function refuses: the odometry thins on its own grid (voxel_size=,
 # its own table's) and make_odometry raises for downsample_to=.
-REFUSED: dict[str, frozenset[str]] = {"Odometry.__init__": frozenset({"downsample_to"})}
+REFUSED: dict[str, frozenset[str]] = {
+    "Odometry.__init__": frozenset({"downsample_to"}),
+    "Localizer.__init__": frozenset({"downsample_to"}),
+}
 KIND_TYPES = {"count": "int", "real": "float", "flag": "bool", "distance": "_DistanceValue"}
 
 

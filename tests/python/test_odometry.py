@@ -260,3 +260,49 @@ def test_a_chosen_step_rule_is_used_from_every_start(tmp_path):
         default.register_frame(cloud)
     np.testing.assert_allclose(adam.poses[:, :3, :], cli_poses, atol=1e-6)
     assert np.abs(default.poses - adam.poses).max() > 1e-6
+
+
+HANDHELD = shared_data_dir() / "balm_handheld_lidar"
+
+
+def handheld_scans(indices: list[int]) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """The hand-held LiDAR's scans `indices` and their reference poses T_world_scan."""
+    names = sorted((HANDHELD / "scans").iterdir())
+    rows = np.loadtxt(HANDHELD / "poses.txt")
+    poses = []
+    for i in indices:
+        T = np.eye(4)
+        T[:3, :] = rows[i].reshape(3, 4)
+        poses.append(T)
+    return [sgd_icp.read_point_cloud(names[i]).points for i in indices], poses
+
+
+@pytest.mark.skipif(not (HANDHELD / "poses.txt").is_file() or not (KITTI / "velodyne").is_dir(),
+                    reason="no hand-held LiDAR or KITTI scans in ../shared/data")
+def test_a_localizer_places_frames_in_a_fixed_map_and_loses_what_it_does_not_hold():
+    even, even_poses = handheld_scans([0, 2, 4, 6, 8, 10])
+    odd, odd_poses = handheld_scans([1, 3, 5, 7, 9])
+    world = np.vstack([p @ T[:3, :3].T + T[:3, 3] for p, T in zip(even, even_poses)])
+    localizer = sgd_icp.Localizer(world)
+    assert isinstance(localizer, sgd_icp.Odometry) and localizer.map_build_ms == 0.0
+    for scan in odd[:2]:
+        localizer.register_frame(scan)
+    localizer.register_frame(sgd_icp.read_point_cloud(KITTI / "velodyne" / "000000.bin").points)
+    assert localizer.last_report.failed
+    for scan in odd[2:]:
+        localizer.register_frame(scan)
+    reports = localizer.reports
+    assert reports[0].start == "global" and not reports[0].recovered
+    assert localizer.lost_frames == 1 and localizer.map_build_ms > 0.0
+    placed = [k for k in range(len(reports)) if k != 2]
+    for k, T in zip(placed, odd_poses):
+        assert np.linalg.norm(localizer.poses[k][:3, 3] - T[:3, 3]) < 0.05, reports[k].message
+    # From a pose given: the first frame starts there.
+    from_init = sgd_icp.Localizer(world, init=odd_poses[0])
+    from_init.register_frame(odd[0])
+    assert from_init.last_report.start == "prediction"
+    assert np.linalg.norm(from_init.poses[0][:3, 3] - odd_poses[0][:3, 3]) < 0.05
+    with pytest.raises(sgd_icp.InvalidInputError, match="no finite point"):
+        sgd_icp.Localizer(np.full((5, 3), np.nan))
+    with pytest.raises(sgd_icp.InvalidInputError, match="not finite"):
+        sgd_icp.Localizer(world, init=np.full((4, 4), np.nan))
