@@ -92,7 +92,8 @@ double median_of(std::vector<double> v) {
 
 constexpr std::string_view kReportHeader =
     "frame,file,failed,recovered,start,converged,iterations,source_points,map_points,overlap,"
-    "inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n";
+    "inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,constraint_ratio,doubtful,"
+    "message\n";
 
 void write_report_row(std::ostream& out, const FrameSource& source, const FrameReport& r) {
   std::string message = r.message;
@@ -101,7 +102,8 @@ void write_report_row(std::ostream& out, const FrameSource& source, const FrameR
       << r.failed << ',' << r.recovered << ',' << enum_name(r.start) << ',' << r.converged << ','
       << r.iterations << ',' << r.source_points << ',' << r.map_points << ',' << r.overlap << ','
       << r.inlier_ratio << ',' << r.inlier_rmse_m << ',' << r.threshold_m << ',' << r.index_build_ms
-      << ',' << r.time_ms << ",\"" << message << "\"\n";
+      << ',' << r.time_ms << ',' << r.constraint_ratio << ',' << r.doubtful << ",\"" << message
+      << "\"\n";
 }
 
 // The frame's covariance: its 36 numbers row-major on one line, NaN as `nan` (whatever its sign).
@@ -443,7 +445,8 @@ void print_run_summary(const OdometryOptions& o, const std::string& method,
             << ", voxel " << odometry.voxel_size_m() << " m\n"
             << "frames: " << frames << ", lost: " << odometry.lost_frames()
             << " (unreadable: " << unreadable << "), recovered: " << odometry.recovered_frames()
-            << ", time per frame: median " << median_of(times_ms) << " ms, max "
+            << ", doubtful: " << odometry.doubtful_frames() << ", time per frame: median "
+            << median_of(times_ms) << " ms, max "
             << (times_ms.empty() ? 0.0 : *std::max_element(times_ms.begin(), times_ms.end()))
             << " ms, " << static_cast<double>(frames) / total_s << " frames/s (with reading)\n"
             << map_summary(o, odometry) << '\n'
@@ -588,7 +591,8 @@ void add_frame_options(CLI::App& cmd, const std::shared_ptr<OdometryOptions>& o)
                  "onto it as for the ATE)");
   cmd.add_option("--report", o->report,
                  "Write one CSV row per frame (failed, recovered, start, converged, iterations, "
-                 "points, overlap, inliers, threshold, times, message)");
+                 "points, overlap, inliers, threshold, times, constraint ratio, doubtful, "
+                 "message)");
   cmd.add_option("--covariances-out", o->covariances_out,
                  "Write each frame's pose covariance relative to the map (m, rad): one line of "
                  "36 numbers, 6x6 row-major, nan for none; needs --uncertainty");

@@ -117,6 +117,13 @@ void bind_odometry(py::module_& m) {
                     "Fraction of the registered frame's points with a map point within one map "
                     "voxel (a frame below half the recent frames' is rejected); 0 when not "
                     "registered.")
+      .def_readonly("doubtful", &FrameReport::doubtful,
+                    "Registered, but the pose may be off (message says why after 'doubtful: '): "
+                    "the scene leaves some motion unconstrained while the prediction was "
+                    "uncertain, or no start overlapped the map like the last frames.")
+      .def_readonly("constraint_ratio", &FrameReport::constraint_ratio,
+                    "The registration's smallest over largest eigenvalue of its point-to-plane "
+                    "information (RegistrationResult.constraint_ratio); 0 when not registered.")
       .def_readonly("converged", &FrameReport::converged,
                     "True if the registration's convergence test passed.")
       .def_readonly("message", &FrameReport::message,
@@ -251,6 +258,8 @@ void bind_odometry(py::module_& m) {
           "frame's coordinates (metres); empty before keep_whole_map() or any registered frame.")
       .def_property_readonly("lost_frames", &Odometry::lost_frames,
                              "Frames lost so far (no start registered them, or unreadable).")
+      .def_property_readonly("doubtful_frames", &Odometry::doubtful_frames,
+                             "Frames registered but doubtful so far (FrameReport.doubtful).")
       .def_property_readonly("recovered_frames", &Odometry::recovered_frames,
                              "Frames registered by a retry so far.")
       .def_property_readonly(

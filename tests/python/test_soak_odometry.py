@@ -14,7 +14,8 @@ from conftest import REPO_ROOT
 
 SCRIPT = REPO_ROOT / "bench" / "soak_odometry.py"
 HEADER = ("frame,file,failed,recovered,start,converged,iterations,source_points,map_points,"
-          "overlap,inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,message\n")
+          "overlap,inlier_ratio,inlier_rmse_m,threshold_m,index_build_ms,time_ms,constraint_ratio,"
+          "doubtful,message\n")
 
 
 @pytest.fixture(scope="module")

@@ -202,6 +202,15 @@ struct FrameReport {
   /// slid off the map), 0 when not registered.
   double overlap = 0.0;
   bool converged = false;  ///< the registration's convergence test passed
+  /// Registered, but the pose may be off (message says why after "doubtful: "): the scene leaves
+  /// some motion unconstrained (the registration's constraint_ratio below 0.05: a floor and little
+  /// else) while the prediction was uncertain by more than two voxels, or no start gave an overlap
+  /// like the last frames' and the best one was taken. The pose is kept (rejecting such frames
+  /// lost 59-75 of 76 cropped hand-held scans and left the map behind); trust it less.
+  bool doubtful = false;
+  /// Of the registration: its smallest over largest eigenvalue of the point-to-plane information
+  /// (result.hpp), 0 when not registered.
+  double constraint_ratio = 0.0;
   /// The frame is identical to the previous one (a sensor delivering a frame twice, as 59 of the
   /// 600 7-Scenes frames): it gets the previous pose and the motion model is kept, since the
   /// data's answer (no motion) would stop the prediction.
@@ -276,6 +285,8 @@ class Odometry {
   /// Frames lost (no start registered them, or unreadable) and recovered (registered by a retry).
   [[nodiscard]] std::size_t lost_frames() const noexcept;
   [[nodiscard]] std::size_t recovered_frames() const noexcept;
+  /// Frames registered but doubtful (FrameReport::doubtful).
+  [[nodiscard]] std::size_t doubtful_frames() const noexcept;
   [[nodiscard]] const OdometrySettings& settings() const noexcept { return settings_; }
   /// The voxel size in use (the derived one once the first frame is in), metres.
   [[nodiscard]] double voxel_size_m() const noexcept { return voxel_size_m_; }
@@ -355,6 +366,8 @@ class Odometry {
   /// says why the starts before it were not taken.
   void accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d& T_prediction,
               double range_m, const std::string& rejected, FrameReport& report);
+  /// Why a registration taken as the frame's pose may be off ("" = none): FrameReport::doubtful.
+  [[nodiscard]] std::string doubt_of(const Attempt& a) const;
   /// Why the global registration does not confirm a wide-basin one ("" = confirmed).
   [[nodiscard]] std::string unconfirmed(const Attempt& wide, const Attempt& global) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
