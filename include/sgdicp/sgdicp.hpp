@@ -27,6 +27,7 @@
 #include "sgdicp/points/scaling.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/deskew.hpp"
 #include "sgdicp/registration/evaluation.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/registration.hpp"

@@ -1707,6 +1707,17 @@ class FrameReport:
         below half the recent frames' is rejected); 0 when not registered.
         """
     @property
+    def doubtful(self) -> bool:
+        """Registered, but the pose may be off (message says why after 'doubtful: '): the scene
+        leaves some motion unconstrained while the prediction was uncertain, or no start
+        overlapped the map like the last frames.
+        """
+    @property
+    def constraint_ratio(self) -> float:
+        """The registration's smallest over largest eigenvalue of its point-to-plane information
+        (RegistrationResult.constraint_ratio); 0 when not registered.
+        """
+    @property
     def converged(self) -> bool:
         """True if the registration's convergence test passed."""
     @property
@@ -1873,6 +1884,9 @@ class Odometry:
     @property
     def lost_frames(self) -> int:
         """Frames lost so far (no start registered them, or unreadable)."""
+    @property
+    def doubtful_frames(self) -> int:
+        """Frames registered but doubtful so far (FrameReport.doubtful)."""
     @property
     def recovered_frames(self) -> int:
         """Frames registered by a retry so far."""
