@@ -16,6 +16,11 @@ struct PointCloud {
   std::vector<Eigen::Vector3f> points;
   std::vector<Eigen::Vector3f> normals;      ///< unit normals, or empty
   std::vector<Eigen::Matrix3f> covariances;  ///< local covariances (m^2), or empty
+  /// Each point's time within its sweep, seconds from the sweep's earliest point, or empty: when
+  /// a moving sensor measured it (a spinning LiDAR takes 0.1 s a sweep), for motion compensation
+  /// (registration/deskew.hpp). Readers store times relative to the earliest one, so that
+  /// absolute clocks (1.7e9 s) keep their microseconds in float.
+  std::vector<float> times_s;
   /// Where the stored points are measured from, metres, in the cloud's own frame: point k is at
   /// origin_m + points[k]. Zero for most data; georeferenced coordinates (UTM, survey data:
   /// millions of metres, which float would snap to a 0.25-0.5 m grid) keep their exactness by
@@ -27,6 +32,10 @@ struct PointCloud {
   }
   [[nodiscard]] bool has_covariances() const noexcept {
     return !points.empty() && covariances.size() == points.size();
+  }
+
+  [[nodiscard]] bool has_times() const noexcept {
+    return !points.empty() && times_s.size() == points.size();
   }
 
   [[nodiscard]] std::size_t size() const noexcept { return points.size(); }
