@@ -138,6 +138,53 @@ TEST(Deskew, ASyntheticSweepUnderAKnownVelocityIsCompensatedBackToItsShape) {
   EXPECT_LT((r.velocity - xi).tail<3>().norm(), 0.02);
 }
 
+TEST(Deskew, LogIsTheInverseOfExp) {
+  Twist xi;
+  xi << 0.7, -1.2, 0.4, 0.9, 0.3, -1.4;
+  EXPECT_LT((log_twist(exp_twist(xi)) - xi).norm(), 1e-9);
+  EXPECT_LT(log_twist(Eigen::Matrix4d::Identity()).norm(), 1e-12);
+}
+
+// With the exact motion over the sweep (the sensor's motion from the sweep's first time to its
+// last), the constant-velocity deskewing puts the sweep back into its shape at the middle pose.
+TEST(Deskew, ASweepUnderAKnownMotionIsCompensatedByThatMotion) {
+  std::mt19937_64 rng(9);
+  Twist xi;
+  xi << 3.0, -0.5, 0.1, 0.02, 0.04, 1.5;
+  const Eigen::Matrix4d T_mid = test::make_transform(0.0, 0.0, -0.3, {0.2, 0.1, 1.0});
+  const Sweep s = sweep_of(room(rng, 5000), T_mid, xi);
+  PointCloud frame = s.points;
+  frame.times_s = s.times_s;
+  const auto [lo, hi] = std::minmax_element(s.times_s.begin(), s.times_s.end());
+  const Eigen::Matrix4d sweep_motion = exp_twist((*hi - *lo) * xi);
+  const PointCloud out = deskewed_by_motion(frame, sweep_motion);
+  ASSERT_EQ(out.times_s, frame.times_s);
+  // The sweep's middle time is 0.05 s only to the float times' precision: the mid pose of the
+  // times' own span.
+  const double mid = 0.5 * (static_cast<double>(*lo) + static_cast<double>(*hi));
+  const Eigen::Matrix4d T = (T_mid * exp_twist((mid - 0.05) * xi)).inverse();
+  std::vector<double> before, after;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const Eigen::Vector3d truth = T.topLeftCorner<3, 3>() * s.world[i] + T.topRightCorner<3, 1>();
+    after.push_back((out.points[i].cast<double>() - truth).norm());
+    before.push_back((frame.points[i].cast<double>() - truth).norm());
+  }
+  EXPECT_GT(median(before), 0.05);
+  EXPECT_LT(*std::max_element(after.begin(), after.end()), 1e-4);
+  PointCloud without = s.points;  // no times: as it is
+  EXPECT_EQ(deskewed_by_motion(without, sweep_motion).points, without.points);
+}
+
+// KITTI's Velodyne turns clockwise seen from above: behind, left, ahead, right, behind.
+TEST(Deskew, AzimuthTimesTurnClockwiseFromBehind) {
+  PointCloud c;
+  c.points = {{-1.0F, 1e-6F, 0.0F}, {0.0F, 1.0F, 0.0F}, {1.0F, 0.0F, 0.0F}, {0.0F, -1.0F, 0.0F},
+              {-1.0F, -1e-6F, 0.0F}};
+  const std::vector<float> t = azimuth_times_s(c, 0.1);
+  const std::vector<float> expected{0.0F, 0.025F, 0.05F, 0.075F, 0.1F};
+  for (std::size_t i = 0; i < t.size(); ++i) EXPECT_NEAR(t[i], expected[i], 1e-6) << i;
+}
+
 TEST(Deskew, ARigidSweepIsLeftAsItIsAndBadInputIsRefused) {
   std::mt19937_64 rng(8);
   PointCloud reference;

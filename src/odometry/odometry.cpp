@@ -81,9 +81,12 @@ PointCloud crop_range(const PointCloud& cloud, double min_range_m, double max_ra
   PointCloud out;
   out.origin_m = cloud.origin_m;
   out.points.reserve(cloud.size());
-  for (const auto& p : cloud.points) {
-    const double r = (cloud.origin_m + p.cast<double>()).norm();
-    if (std::isfinite(r) && r >= min_range_m && r <= max_range_m) out.points.push_back(p);
+  const bool times = cloud.has_times();
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const double r = (cloud.origin_m + cloud.points[i].cast<double>()).norm();
+    if (!(std::isfinite(r) && r >= min_range_m && r <= max_range_m)) continue;
+    out.points.push_back(cloud.points[i]);
+    if (times) out.times_s.push_back(cloud.times_s[i]);
   }
   return out;
 }

@@ -294,15 +294,38 @@ template VoxelTable<Moments> accumulate(const PointCloud&, double, std::size_t,
 
 }  // namespace detail
 
+namespace {
+
+// The mean time of each voxel's points, in the voxels' first-seen order (the centroids'): one
+// counting pass that numbers every point's voxel, only for a cloud with times.
+std::vector<float> voxel_mean_times(const PointCloud& cloud, double voxel_size_m) {
+  const detail::VoxelGrid grid(voxel_size_m, detail::largest_coordinate(cloud));
+  const auto table = detail::voxel_table<detail::Counted>(
+      cloud, grid, cloud.size() / 8, std::numeric_limits<std::size_t>::max(), true, 1);
+  std::vector<double> sums(table.keys.size(), 0.0);
+  std::vector<double> counts(table.keys.size(), 0.0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    sums[table.point_slots[i]] += static_cast<double>(cloud.times_s[i]);
+    counts[table.point_slots[i]] += 1.0;
+  }
+  std::vector<float> out(sums.size());
+  for (std::size_t v = 0; v < out.size(); ++v) out[v] = static_cast<float>(sums[v] / counts[v]);
+  return out;
+}
+
+}  // namespace
+
 PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m, std::size_t num_threads) {
   if (num_threads > kMaxThreads) {
     throw InvalidSettingsError("voxel_downsample: num_threads must be at most " +
                                std::to_string(kMaxThreads) + " (0 = all cores), got " +
                                std::to_string(num_threads));
   }
-  return detail::centroids_of(
+  PointCloud out = detail::centroids_of(
       detail::accumulate_voxels<detail::Centroid>(cloud, voxel_size_m, num_threads).voxels,
       cloud.origin_m);
+  if (cloud.has_times()) out.times_s = voxel_mean_times(cloud, voxel_size_m);
+  return out;
 }
 
 double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {

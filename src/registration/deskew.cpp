@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -129,6 +130,50 @@ Eigen::Matrix4d exp_twist(const Twist& xi) {
                             (theta - std::sin(theta)) / (theta * theta * theta) * W * W;
   T.topRightCorner<3, 1>() = V * v;
   return T;
+}
+
+Twist log_twist(const Eigen::Matrix4d& T) {
+  const Eigen::AngleAxisd turn(Eigen::Matrix3d(T.topLeftCorner<3, 3>()));
+  const double theta = turn.angle();
+  const Eigen::Vector3d w = theta * turn.axis();
+  Eigen::Matrix3d V_inverse = Eigen::Matrix3d::Identity();
+  if (theta > 1e-9) {
+    const Eigen::Matrix3d W = skew(w);
+    V_inverse += -0.5 * W + (1.0 - theta * std::sin(theta) / (2.0 * (1.0 - std::cos(theta)))) /
+                                (theta * theta) * W * W;
+  }
+  Twist xi;
+  xi.head<3>() = V_inverse * T.topRightCorner<3, 1>();
+  xi.tail<3>() = w;
+  return xi;
+}
+
+PointCloud deskewed_by_motion(const PointCloud& frame, const Eigen::Matrix4d& sweep_motion) {
+  if (!frame.has_times()) return frame;
+  const auto [lo, hi] = std::minmax_element(frame.times_s.begin(), frame.times_s.end());
+  if (!(*hi > *lo)) return frame;
+  const double span = static_cast<double>(*hi) - static_cast<double>(*lo);
+  const Twist xi = log_twist(sweep_motion);
+  PointCloud out = frame;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const double s = (static_cast<double>(frame.times_s[i]) - static_cast<double>(*lo)) / span;
+    const Eigen::Matrix4d T = exp_twist((s - 0.5) * xi);
+    const Eigen::Vector3d p = frame.origin_m + frame.points[i].cast<double>();
+    const Eigen::Vector3d moved = T.topLeftCorner<3, 3>() * p + T.topRightCorner<3, 1>();
+    out.points[i] = (moved - frame.origin_m).cast<float>();
+  }
+  return out;
+}
+
+std::vector<float> azimuth_times_s(const PointCloud& frame, double sweep_s) {
+  std::vector<float> out;
+  out.reserve(frame.size());
+  for (const Eigen::Vector3f& point : frame.points) {
+    const Eigen::Vector3d p = frame.origin_m + point.cast<double>();
+    const double s = 0.5 * (1.0 - std::atan2(p.y(), p.x()) / std::numbers::pi);
+    out.push_back(static_cast<float>(s * sweep_s));
+  }
+  return out;
 }
 
 Eigen::Matrix4d pose_at(const DeskewedRegistration& r, double t_s) {

@@ -12,7 +12,9 @@ namespace sgdicp {
 /// points in it. Voxel (i, j, l) holds the points with floor(x / voxel_size_m) = i, etc.
 /// Output order is the order of each voxel's first point in the input, so the result is
 /// deterministic. Normals and covariances are not carried over (the output has none):
-/// estimate them after downsampling.
+/// estimate them after downsampling. Times (PointCloud::times_s) are: each voxel's point gets the
+/// mean time of its points (a voxel at a sweep's seam mixes its start and end: deskew before
+/// thinning).
 ///
 /// num_threads (0 = every core): clouds of 32,768 points or more are hashed and summed in two
 /// fixed halves, merged in order, which two threads make at once; the result is the same for any

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -59,6 +60,24 @@ struct DeskewedRegistration {
                                                   const ReferenceIndex& reference,
                                                   const Eigen::Matrix4d& T_init,
                                                   const DeskewSettings& settings = {});
+
+/// log of a rigid motion: the twist xi with exp_twist(xi) == T (rotation below pi).
+[[nodiscard]] Twist log_twist(const Eigen::Matrix4d& T);
+
+/// The frame's points moved to where they would be had the whole sweep been measured at its
+/// middle, the sensor moving by `sweep_motion` from the sweep's first time to its last (constant
+/// velocity: KISS-ICP's deskewing): p' = Exp((s - 1/2) log(sweep_motion)) p, s the point's time
+/// in [0, 1] over the sweep. A frame without times, or whose times are all equal, is returned as
+/// it is. Times and everything else of the frame are kept.
+[[nodiscard]] PointCloud deskewed_by_motion(const PointCloud& frame,
+                                            const Eigen::Matrix4d& sweep_motion);
+
+/// Times for a sweep of a spinning LiDAR stored without them (KITTI's .bin): each point's
+/// azimuth seen from the sensor, as the sensor turns clockwise seen from above (z up; KITTI's
+/// Velodyne) through one sweep of sweep_s seconds, from the -x axis (behind a KITTI car: the
+/// seam) through +y, +x and -y back to it: s = (1 - atan2(y, x) / pi) / 2, time s * sweep_s
+/// (KISS-ICP's rule for KITTI).
+[[nodiscard]] std::vector<float> azimuth_times_s(const PointCloud& frame, double sweep_s = 0.1);
 
 /// The sensor's pose at time t_s (T(t) above).
 [[nodiscard]] Eigen::Matrix4d pose_at(const DeskewedRegistration& r, double t_s);
