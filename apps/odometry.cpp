@@ -48,6 +48,7 @@ struct OdometryOptions {
   // sgdicp localize: the map to localize in, and the first frame's pose in it ("global": none).
   std::string localize_in;
   std::string init = "global";
+  std::string deskew = "auto";
   bool ground_truth_prefix = false;
   double rate_hz = 0.0;
   std::size_t max_frames = 0;
@@ -78,6 +79,7 @@ OdometrySettings odometry_settings(const OdometryOptions& o) {
   s.adaptive_threshold = !o.settings.values.contains("max-distance");
   s.step_within_threshold = !o.settings.values.contains("learning-rate");
   // A step rule chosen on the command line is used from every start.
+  s.deskew = parse_enum<DeskewMode>(o.deskew);
   s.tracking_gauss_newton = !o.settings.values.contains("optimizer") &&
                             !o.settings.preconditioner.has_value() &&
                             !o.settings.values.contains("learning-rate");
@@ -596,6 +598,12 @@ void add_frame_options(CLI::App& cmd, const std::shared_ptr<OdometryOptions>& o)
   cmd.add_option("--covariances-out", o->covariances_out,
                  "Write each frame's pose covariance relative to the map (m, rad): one line of "
                  "36 numbers, 6x6 row-major, nan for none; needs --uncertainty");
+  cmd.add_option("--deskew", o->deskew,
+                 "Motion compensation of each frame before it is registered and enters the map: "
+                 "auto (when the frames carry per-point times: PCD/PLY time fields, docs/io.md), "
+                 "none, or azimuth (times from each point's azimuth, for KITTI's .bin sweeps) "
+                 "[default: auto]")
+      ->check(CLI::IsMember(canonical_names<DeskewMode>()));
   cmd.add_option("--max-frames", o->max_frames, "Stop after this many frames [default: 0 = all]");
   cmd.add_flag("--quiet,-q", o->quiet, "No progress and no per-frame failure lines on stderr");
   add_table_options(cmd, odometry_settings_table(), OdometrySettings{}, o->odometry_values);

@@ -1769,6 +1769,7 @@ class Odometry:
     def __init__(
         self,
         method: str = "sgd",
+        deskew: str = "auto",
         *,
         max_range: float = ...,
         min_range: float = ...,
@@ -1840,7 +1841,9 @@ class Odometry:
         threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for an
         invalid value.
         """
-    def register_frame(self, points: _Points) -> npt.NDArray[np.float64]:
+    def register_frame(
+        self, points: _Points, times: npt.ArrayLike | None = None
+    ) -> npt.NDArray[np.float64]:
         """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),
         and returns its (4, 4) pose in the first frame's coordinates (the first frame: the
         identity). A frame that fails (see last_report) gets the predicted pose.
@@ -1907,6 +1910,7 @@ class Localizer(Odometry):
         map: _Points,
         init: _Transform | None = None,
         method: str = "sgd",
+        deskew: str = "auto",
         *,
         max_range: float = ...,
         min_range: float = ...,

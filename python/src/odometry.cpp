@@ -1,5 +1,6 @@
 // sgd_icp.Odometry: the library's Odometry (odometry.hpp) fed one NumPy frame at a time, with the
 // keywords of the CLI's `sgdicp odometry` options (the odometry table, then the registration's).
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -23,6 +24,10 @@ OdometrySettings take_odometry_keywords(py::dict& overrides) {
   s.step_within_threshold = !overrides.contains("learning_rate");
   s.tracking_gauss_newton =
       !overrides.contains("optimizer") && !overrides.contains("learning_rate");
+  if (overrides.contains("deskew")) {
+    s.deskew = parse_enum<DeskewMode>(py::cast<std::string>(overrides["deskew"]));
+    overrides.attr("pop")("deskew");
+  }
   return s;
 }
 
@@ -93,6 +98,29 @@ py::array_t<double> stacked(const std::vector<Eigen::Matrix4d>& poses) {
     }
   }
   return out;
+}
+
+// The frame, with its points' times (seconds, relative to the earliest, computed in double) when
+// given: rows with a non-finite coordinate are kept then, so that the times stay aligned, and the
+// odometry's range crop drops them.
+ConvertedCloud frame_with_times(const py::handle& points, const py::object& times) {
+  if (times.is_none()) return cloud_from_array(points, "frame", NonFinite::drop, true);
+  ConvertedCloud frame = cloud_from_array(points, "frame", NonFinite::keep, true);
+  const auto t = py::cast<py::array_t<double, py::array::c_style | py::array::forcecast>>(times);
+  if (t.ndim() != 1 || static_cast<std::size_t>(t.shape(0)) != frame.cloud.size()) {
+    throw InvalidInputError("times: one per point, (" + std::to_string(frame.cloud.size()) +
+                            ",), got " + std::to_string(t.size()) + " values");
+  }
+  const double* data = t.data();
+  if (!std::all_of(data, data + t.size(), [](double v) { return std::isfinite(v); })) {
+    throw InvalidInputError("times: a time is not finite");
+  }
+  const double earliest = t.size() > 0 ? *std::min_element(data, data + t.size()) : 0.0;
+  frame.cloud.times_s.reserve(frame.cloud.size());
+  for (py::ssize_t i = 0; i < t.size(); ++i) {
+    frame.cloud.times_s.push_back(static_cast<float>(data[i] - earliest));
+  }
+  return frame;
 }
 
 }  // namespace
@@ -188,19 +216,20 @@ void bind_odometry(py::module_& m) {
                .c_str())
       .def(
           "register_frame",
-          [](Odometry& o, const py::handle& points) {
-            const ConvertedCloud frame =
-                cloud_from_array(points, "frame", NonFinite::drop, /*allow_empty=*/true);
+          [](Odometry& o, const py::handle& points, const py::object& times) {
+            const ConvertedCloud frame = frame_with_times(points, times);
             const Eigen::Matrix4d T = [&] {
               const py::gil_scoped_release release;
               return o.register_frame(frame.cloud);
             }();
             return array_from_matrix(T);
           },
-          "points"_a,
+          "points"_a, "times"_a = py::none(),
           "Registers the next frame, an (N, 3) float32/float64 array in its sensor frame "
           "(metres), and returns its (4, 4) pose in the first frame's coordinates (the first "
-          "frame: the identity). A frame that fails (see last_report) gets the predicted pose.")
+          "frame: the identity). times: None, or each point's time (N,), seconds, any origin: the "
+          "frame is then deskewed (deskew='auto', docs/odometry.md). A frame that fails (see "
+          "last_report) gets the predicted pose.")
       .def(
           "skip_frame",
           [](Odometry& o, const std::string& message) {

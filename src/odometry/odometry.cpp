@@ -232,7 +232,7 @@ Eigen::Matrix4d Odometry::register_frame_unguarded(const PointCloud& frame, doub
     return repeat_previous_pose(started);
   }
   previous_points_ = frame.points;
-  const PointCloud cropped = crop_range(frame, settings_.min_range_m, settings_.max_range_m);
+  const PointCloud cropped = prepared_frame(frame);
   // The frame's range, which a derived voxel follows (start, grow_voxel); a set one needs none.
   const double range_m = settings_.voxel_size_m > 0.0 ? 0.0 : range_percentile_m(cropped);
   if (!map_ && !cropped.empty()) start(range_m);
@@ -264,6 +264,7 @@ Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double ran
     report.converged = true;
     if (with_uncertainty()) report.covariance.setZero();  // exact: it defines the coordinates
     report.message = poses_.empty() ? "first frame" : "map restarted (no map before)";
+    if (map_frame.has_times()) first_map_frame_ = map_frame;
     add_to_whole_map(cropped, map_frame, report.T_first_frame);
     return finish(report, map_frame, started);
   }
@@ -290,6 +291,7 @@ Eigen::Matrix4d Odometry::register_on_grid(const PointCloud& cropped, double ran
     add_to_whole_map(cropped, map_frame, report.T_first_frame);
   }
   const Eigen::Matrix4d T = finish(report, map_frame, started);
+  if (!report.failed) deskew_first_frames(map_frame);
   if (!report.failed) {
     ranges_m_.push_back(range_m);  // the next frame's range joins these
     if (ranges_m_.size() >= kRangeFrames) ranges_m_.erase(ranges_m_.begin());

@@ -41,6 +41,24 @@ struct RegistrationResult;  // result.hpp
 
 /// The settings of the odometry pipeline (the registration step has its own: SgdSettings or
 /// BatchSettings). Lengths with a 0 default are derived from the first frame's extent (auto).
+/// Motion compensation of each frame (OdometrySettings::deskew).
+enum class DeskewMode {
+  automatic,  ///< when the frame carries times (PointCloud::times_s)
+  none,       ///< never
+  azimuth,    ///< times from each point's azimuth (azimuth_times_s: KITTI's sweeps)
+};
+inline constexpr std::array<EnumName<DeskewMode>, 3> kDeskewModeNames{{
+    {DeskewMode::automatic, "auto"},
+    {DeskewMode::none, "none"},
+    {DeskewMode::azimuth, "azimuth"},
+}};
+constexpr const auto& enum_names(DeskewMode) {
+  return kDeskewModeNames;
+}
+constexpr std::string_view enum_noun(DeskewMode) {
+  return "deskew mode";
+}
+
 struct OdometrySettings {
   /// Points farther from the sensor are dropped; the map keeps voxels within this radius of the
   /// current pose.
@@ -91,6 +109,11 @@ struct OdometrySettings {
   /// start; the CLI sets it when --optimizer, --preconditioner or --learning-rate is given,
   /// Python when optimizer= or learning_rate= is).
   bool tracking_gauss_newton = true;
+  /// Each frame with times is deskewed before it is registered and enters the map: moved to its
+  /// sweep's middle by the predicted motion over the sweep (constant velocity, the sweep taken to
+  /// last from one frame to the next: deskewed_by_motion), once a motion is known
+  /// (docs/odometry.md, *Deskewing*). A frame without times is registered as it is.
+  DeskewMode deskew = DeskewMode::automatic;
 
   /// Throws InvalidSettingsError naming the first setting out of range (odometry_settings_table),
   /// spelled as `names` says.
@@ -371,6 +394,12 @@ class Odometry {
   /// Why the global registration does not confirm a wide-basin one ("" = confirmed).
   [[nodiscard]] std::string unconfirmed(const Attempt& wide, const Attempt& global) const;
   Eigen::Matrix4d finish(FrameReport report, const PointCloud& map_frame, double started_ms);
+  /// The frame with the times the deskew mode gives it, cropped to the range limits, and
+  /// deskewed when it has times and a motion is known.
+  [[nodiscard]] PointCloud prepared_frame(const PointCloud& frame) const;
+  /// After the second frame with times: the map made anew of the first two, deskewed by the
+  /// motion between them.
+  void deskew_first_frames(const PointCloud& map_frame);
   /// Adds the registered frame (cropped, or its map_frame thinning) at pose T to the whole map,
   /// when one is kept.
   void add_to_whole_map(const PointCloud& cropped, const PointCloud& map_frame,
@@ -393,8 +422,9 @@ class Odometry {
   std::optional<VoxelMap> map_;
   std::optional<double> whole_map_voxel_m_;  ///< keep_whole_map's size (0 = the odometry's voxel)
   std::optional<WholeMap> whole_map_;
-  std::optional<PointCloud> fixed_map_;  ///< fix_map's cloud, until build_fixed_map takes it
-  bool localizing_ = false;              ///< the map is fixed (fix_map)
+  std::optional<PointCloud> first_map_frame_;  ///< with times, until deskew_first_frames
+  std::optional<PointCloud> fixed_map_;        ///< fix_map's cloud, until build_fixed_map takes it
+  bool localizing_ = false;                    ///< the map is fixed (fix_map)
   std::optional<Eigen::Matrix4d> T_map_first_frame_;
   double fixed_map_build_ms_ = 0.0;
   bool registered_any_ = false;  ///< a frame has been registered (T_last_good_ is a pose)
