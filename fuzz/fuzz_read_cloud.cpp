@@ -1,7 +1,9 @@
 // libFuzzer target: read_point_cloud_from_memory for one format, FileFormat::SGDICP_FUZZ_FORMAT
 // (one executable per format, see CMakeLists.txt). Documented failure: FormatError. What is
 // returned must keep the reader's promises: only finite points, every point of the file either
-// returned or counted as dropped, the format that was asked for. Anything else is a finding.
+// returned or counted as dropped, the format that was asked for, times (if any) one per point,
+// finite and from the earliest. Anything else is a finding.
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -36,6 +38,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check(result.cloud.size() + result.non_finite_dropped == result.points_in_file,
           "points returned + dropped != points in file");
     for (const auto& p : result.cloud.points) check(p.allFinite(), "a non-finite point returned");
+    const auto& times = result.cloud.times_s;
+    check(times.empty() || times.size() == result.cloud.size(), "times not one per point");
+    for (const float t : times) check(std::isfinite(t) && t >= 0.0f, "a time not finite or < 0");
   } catch (const sgdicp::FormatError&) {
   }
   return 0;

@@ -113,6 +113,31 @@ std::string cloud_limit_text(std::uint64_t points) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Per-point times
+
+std::optional<std::size_t> time_field_rank(std::string_view field_name) {
+  // Integer nanoseconds from the sweep's start first (exact), then float seconds within the
+  // sweep, then absolute seconds (docs/io.md, "Per-point times").
+  constexpr std::array<std::string_view, 4> kByPriority = {"t", "offset_time", "time", "timestamp"};
+  const auto found = std::find(kByPriority.begin(), kByPriority.end(), field_name);
+  if (found == kByPriority.end()) return std::nullopt;
+  return static_cast<std::size_t>(found - kByPriority.begin());
+}
+
+void PointSink::finish() {
+  if (times_s_.empty()) return;
+  const double earliest = *std::min_element(times_s_.begin(), times_s_.end());
+  // A span beyond float's range (only a hostile file) saturates, so every stored time is finite.
+  constexpr double kLongest_s = std::numeric_limits<float>::max();
+  std::vector<float>& out = result_.cloud.times_s;
+  out.reserve(times_s_.size());
+  for (const double t : times_s_) {
+    out.push_back(static_cast<float>(std::min(t - earliest, kLongest_s)));
+  }
+  times_s_ = {};
+}
+
+// ---------------------------------------------------------------------------------------------
 // Writers
 
 // A georeferenced cloud (origin_m not zero) is written as origin + point in double, which float
@@ -131,36 +156,41 @@ void append_number_text(std::string& out, T value) {
   out.append(buffer.data(), r.ptr);
 }
 
-// Each point as the numbers written: `emit(out, value)` for x, y and z, in float or double.
+// Each point as the numbers written: `emit(out, value, last)` for x, y and z, in float or double,
+// then its time as a float when `with_times`; `last` marks the point's last value.
 template <typename Emit>
-void append_points(std::string& out, const PointCloud& cloud, const Emit& emit) {
+void append_points(std::string& out, const PointCloud& cloud, bool with_times, const Emit& emit) {
   const bool wide = written_in_double(cloud);
-  for (const auto& p : cloud.points) {
+  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
     for (Eigen::Index axis = 0; axis < 3; ++axis) {
+      const bool last = axis == 2 && !with_times;
       if (wide) {
-        emit(out, static_cast<double>(p[axis]) + cloud.origin_m[axis], axis);
+        emit(out, static_cast<double>(p[axis]) + cloud.origin_m[axis], last);
       } else {
-        emit(out, p[axis], axis);
+        emit(out, p[axis], last);
       }
     }
+    if (with_times) emit(out, cloud.times_s[i], true);
   }
 }
 
 }  // namespace
 
-void append_points_text(std::string& out, const PointCloud& cloud) {
-  out.reserve(out.size() + cloud.size() * (written_in_double(cloud) ? 60 : 36));
-  append_points(out, cloud, [](std::string& text, auto value, Eigen::Index axis) {
+void append_points_text(std::string& out, const PointCloud& cloud, bool with_times) {
+  const std::size_t per_point = (written_in_double(cloud) ? 60 : 36) + (with_times ? 12 : 0);
+  out.reserve(out.size() + cloud.size() * per_point);
+  append_points(out, cloud, with_times, [](std::string& text, auto value, bool last) {
     append_number_text(text, value);
-    text += axis < 2 ? ' ' : '\n';
+    text += last ? '\n' : ' ';
   });
 }
 
-void append_points_binary(std::string& out, const PointCloud& cloud) {
-  out.reserve(out.size() + cloud.size() * (written_in_double(cloud) ? 24 : 12));
-  append_points(out, cloud, [](std::string& bytes, auto value, Eigen::Index) {
-    append_little_endian(bytes, value);
-  });
+void append_points_binary(std::string& out, const PointCloud& cloud, bool with_times) {
+  const std::size_t per_point = (written_in_double(cloud) ? 24 : 12) + (with_times ? 4 : 0);
+  out.reserve(out.size() + cloud.size() * per_point);
+  append_points(out, cloud, with_times,
+                [](std::string& bytes, auto value, bool) { append_little_endian(bytes, value); });
 }
 
 }  // namespace sgdicp::io_detail

@@ -39,6 +39,7 @@ ReadResult parse_point_cloud(const std::string& name, std::string_view data, Fil
     case FileFormat::automatic:
       break;  // resolved by the callers
   }
+  sink.finish();
   return result;
 }
 

@@ -140,12 +140,39 @@ void write_whole_file(const fs::path& path, const std::string& name, std::string
 // Output of the readers
 
 // Every reader hands each parsed point here, in double: the one place where coordinates are
-// converted to the float storage and non-finite points are dropped and counted.
+// converted to the float storage and non-finite points are dropped and counted. A reader of a
+// file with per-point times calls record_times() first, then add() with each point's time.
 class PointSink {
  public:
   PointSink(const std::string& name, ReadResult& result) : name_(name), result_(result) {}
 
-  void add(double x, double y, double z) {
+  void record_times() { timed_ = true; }
+
+  void add(double x, double y, double z) { add_point(x, y, z, true); }
+
+  // A point without a usable time is dropped like one without usable coordinates: deskewing
+  // could not place it. Times beyond float's range count as non-finite, as coordinates do.
+  void add(double x, double y, double z, double time_s) {
+    const bool usable = std::abs(time_s) <= std::numeric_limits<float>::max();
+    if (add_point(x, y, z, usable)) times_s_.push_back(time_s);
+  }
+
+  // Reserves for a declared count, but never more than the data could hold: a header can lie.
+  void reserve(std::uint64_t declared, std::size_t upper_bound) {
+    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(declared, upper_bound));
+    result_.cloud.points.reserve(n);
+    if (timed_) times_s_.reserve(n);
+  }
+
+  // Stores the times relative to the earliest, subtracted in double so that absolute clocks
+  // (UNIX time, 1.7e9 s) keep their microseconds in float.
+  void finish();
+
+  [[nodiscard]] ReadResult& result() { return result_; }
+
+ private:
+  // Whether the point was kept.
+  bool add_point(double x, double y, double z, bool time_usable) {
     if (++seen_ > kMaxCloudPoints) {
       throw FormatError(name_ + ": more than the largest cloud read (" +
                         std::to_string(kMaxCloudPoints) + " points)");
@@ -160,27 +187,49 @@ class PointSink {
     const float xf = to_float_saturating(x - origin.x());
     const float yf = to_float_saturating(y - origin.y());
     const float zf = to_float_saturating(z - origin.z());
-    if (std::isfinite(xf) && std::isfinite(yf) && std::isfinite(zf)) {
+    if (time_usable && std::isfinite(xf) && std::isfinite(yf) && std::isfinite(zf)) {
       result_.cloud.points.emplace_back(xf, yf, zf);
-    } else {
-      ++result_.non_finite_dropped;
+      return true;
     }
+    ++result_.non_finite_dropped;
+    return false;
   }
 
-  // Reserves for a declared count, but never more than the data could hold: a header can lie.
-  void reserve(std::uint64_t declared, std::size_t upper_bound) {
-    result_.cloud.points.reserve(
-        static_cast<std::size_t>(std::min<std::uint64_t>(declared, upper_bound)));
-  }
-
-  [[nodiscard]] ReadResult& result() { return result_; }
-
- private:
   const std::string& name_;
   ReadResult& result_;
   std::uint64_t seen_ = 0;
   bool has_origin_ = false;
+  bool timed_ = false;
+  std::vector<double> times_s_;  // of the kept points, as in the file (seconds)
 };
+
+// ---------------------------------------------------------------------------------------------
+// Per-point times (common.cpp; docs/io.md, "Per-point times")
+
+// Rank of a field name among the per-point time fields drivers write, 0 the highest priority
+// (Ouster t, Livox offset_time, Velodyne time, Hesai timestamp); nullopt for any other name.
+std::optional<std::size_t> time_field_rank(std::string_view field_name);
+
+// Seconds per unit of a time field: an integer field counts nanoseconds, a floating one seconds.
+inline double time_field_unit_s(bool is_integer) {
+  return is_integer ? 1e-9 : 1.0;
+}
+
+// Index of the time field among the named fields: the recognised name of highest priority, or
+// nullopt. `name_of(i)` gives the name of field i.
+template <typename NameOf>
+std::optional<std::size_t> find_time_field(std::size_t fields, const NameOf& name_of) {
+  std::optional<std::size_t> best;
+  std::optional<std::size_t> best_rank;
+  for (std::size_t i = 0; i < fields; ++i) {
+    const auto rank = time_field_rank(name_of(i));
+    if (rank && (!best_rank || *rank < *best_rank)) {
+      best = i;
+      best_rank = rank;
+    }
+  }
+  return best;
+}
 
 // A declared point count beyond the largest cloud: the message names the count and the limit.
 bool beyond_cloud_limit(std::uint64_t points);
@@ -206,8 +255,9 @@ void read_vtk(const std::string& name, std::string_view data, PointSink& sink);
 // A georeferenced cloud (origin_m not zero) is written as origin + point in double, which float
 // cannot hold; any other cloud as the floats it stores.
 bool written_in_double(const PointCloud& cloud);
-void append_points_text(std::string& out, const PointCloud& cloud);
-void append_points_binary(std::string& out, const PointCloud& cloud);
+// With `with_times`, each point's time follows its x y z as a float (seconds).
+void append_points_text(std::string& out, const PointCloud& cloud, bool with_times = false);
+void append_points_binary(std::string& out, const PointCloud& cloud, bool with_times = false);
 std::string ply_text(const PointCloud& cloud, Encoding encoding);
 std::string pcd_text(const PointCloud& cloud, Encoding encoding);
 

@@ -25,8 +25,10 @@ struct PcdHeader {
   std::size_t data_line = 0;  // line of the DATA key
   std::size_t fields_line = 0;
   std::size_t type_line = 0;
+  std::size_t count_line = 0;
   std::size_t points_line = 0;
   std::array<std::size_t, 3> xyz{};  // field index of x, y, z
+  std::optional<std::size_t> time;   // field index of the per-point time, if any
 };
 
 // One header line: its key, the values after it and its number, for the messages.
@@ -114,6 +116,7 @@ void parse_pcd_types(const PcdKeyLine& line, PcdHeader& header, PcdKeysSeen& see
 
 void parse_pcd_counts(const PcdKeyLine& line, PcdHeader& header, const PcdKeysSeen& seen) {
   expect_per_field(line, header, seen);
+  header.count_line = line.at;
   for (std::size_t i = 0; i < line.values.size(); ++i) {
     header.fields[i].count = line.uint_value(line.values[i]);
     if (header.fields[i].count == 0) {
@@ -218,6 +221,24 @@ std::array<std::size_t, 3> find_pcd_xyz(const std::string& name, const PcdHeader
   return xyz;
 }
 
+// Field index of the per-point time (docs/io.md, "Per-point times"): a single value, named once.
+std::optional<std::size_t> find_pcd_time(const std::string& name, const PcdHeader& header) {
+  const auto& fields = header.fields;
+  const auto time = find_time_field(
+      fields.size(), [&](std::size_t i) -> std::string_view { return fields[i].name; });
+  if (!time) return std::nullopt;
+  const PcdField& field = fields[*time];
+  if (std::count_if(fields.begin(), fields.end(),
+                    [&](const PcdField& f) { return f.name == field.name; }) > 1) {
+    fail_line(name, header.fields_line, "field '" + field.name + "' appears twice");
+  }
+  if (field.count != 1) {
+    fail_line(name, header.count_line,
+              "field '" + field.name + "' (the per-point time) must be a single value (COUNT 1)");
+  }
+  return time;
+}
+
 // POINTS, when given, must be WIDTH x HEIGHT; without it, WIDTH x HEIGHT is the point count.
 void set_pcd_points(const std::string& name, PcdHeader& header, bool have_points) {
   const auto cells = checked_mul(header.width, header.height);
@@ -249,6 +270,7 @@ PcdHeader parse_pcd_header(const std::string& name, TextCursor& cursor) {
   check_pcd_keys_seen(name, cursor.line(), seen);
   check_pcd_float_sizes(name, header);
   header.xyz = find_pcd_xyz(name, header);
+  header.time = find_pcd_time(name, header);
   set_pcd_points(name, header, seen.points);
   return header;
 }
@@ -278,15 +300,22 @@ void check_pcd_values(const std::string& name, std::size_t line_number, const Pc
   }
 }
 
+// Seconds per unit of the time field (an integer field counts nanoseconds).
+double pcd_time_unit_s(const PcdField& field) {
+  return time_field_unit_s(field.type != 'F');
+}
+
 void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor& cursor,
                     PointSink& sink) {
-  // Column of x, y and z on a line, where fields with COUNT > 1 take several columns.
-  std::array<std::uint64_t, 3> column{};
+  // Column of x, y, z and the time on a line, where fields with COUNT > 1 take several columns;
+  // no column has the time's index when there is none.
+  std::array<std::uint64_t, 4> column{0, 0, 0, kNoLimit};
   std::uint64_t columns = 0;
   for (std::size_t f = 0; f < header.fields.size(); ++f) {
     for (std::size_t axis = 0; axis < 3; ++axis) {
       if (header.xyz[axis] == f) column[axis] = columns;
     }
+    if (header.time == f) column[3] = columns;
     const auto next = checked_add(columns, header.fields[f].count);
     if (!next) fail_line(name, header.data_line, "COUNT values overflow");
     columns = *next;
@@ -301,7 +330,7 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
                 "expected " + std::to_string(header.points) + " points, file ends after " +
                     std::to_string(read));
     }
-    std::array<std::string_view, 3> xyz;
+    std::array<std::string_view, 4> xyzt;
     std::uint64_t count = 0;
     std::size_t i = 0;
     while (i < line.size()) {
@@ -309,8 +338,8 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
       const std::size_t start = i;
       while (i < line.size() && !is_space(line[i])) ++i;
       if (i == start) break;
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        if (column[axis] == count) xyz[axis] = line.substr(start, i - start);
+      for (std::size_t k = 0; k < 4; ++k) {
+        if (column[k] == count) xyzt[k] = line.substr(start, i - start);
       }
       ++count;
     }
@@ -320,13 +349,17 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
                 "expected " + std::to_string(columns) + " values, got " + std::to_string(count));
     }
     check_pcd_values(name, cursor.line(), header, line);
-    std::array<double, 3> p{};
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      if (!parse_number(xyz[axis], p[axis])) {
-        fail_line(name, cursor.line(), shown(xyz[axis]) + " is not a number");
+    std::array<double, 4> p{};
+    for (std::size_t k = 0; k < (header.time ? 4 : 3); ++k) {
+      if (!parse_number(xyzt[k], p[k])) {
+        fail_line(name, cursor.line(), shown(xyzt[k]) + " is not a number");
       }
     }
-    sink.add(p[0], p[1], p[2]);
+    if (header.time) {
+      sink.add(p[0], p[1], p[2], p[3] * pcd_time_unit_s(header.fields[*header.time]));
+    } else {
+      sink.add(p[0], p[1], p[2]);
+    }
     ++read;
   }
   while (cursor.next_line(line)) {
@@ -339,6 +372,33 @@ void read_pcd_ascii(const std::string& name, const PcdHeader& header, TextCursor
 
 double load_pcd_coordinate(const char* p, std::size_t size) {
   return size == 4 ? load<float>(p, false) : load<double>(p, false);
+}
+
+template <typename Signed, typename Unsigned>
+double load_pcd_integer(const char* p, bool is_signed) {
+  return is_signed ? static_cast<double>(load<Signed>(p, false))
+                   : static_cast<double>(load<Unsigned>(p, false));
+}
+
+// A value of any PCD type (TYPE I, U or F and its SIZE, checked by the header).
+double load_pcd_value(const char* p, const PcdField& field) {
+  if (field.type == 'F') return load_pcd_coordinate(p, field.size);
+  const bool is_signed = field.type == 'I';
+  switch (field.size) {
+    case 1:
+      return load_pcd_integer<std::int8_t, std::uint8_t>(p, is_signed);
+    case 2:
+      return load_pcd_integer<std::int16_t, std::uint16_t>(p, is_signed);
+    case 4:
+      return load_pcd_integer<std::int32_t, std::uint32_t>(p, is_signed);
+    default:
+      return load_pcd_integer<std::int64_t, std::uint64_t>(p, is_signed);
+  }
+}
+
+// The time of the point whose time field is at p, in seconds.
+double load_pcd_time_s(const char* p, const PcdField& field) {
+  return load_pcd_value(p, field) * pcd_time_unit_s(field);
 }
 
 // Byte layout of one point: offset of each field and the total size.
@@ -392,13 +452,21 @@ void read_pcd_binary(const std::string& name, const PcdHeader& header, std::stri
     offset[axis] = static_cast<std::size_t>(layout.field_offset[header.xyz[axis]]);
     size[axis] = header.fields[header.xyz[axis]].size;
   }
+  const PcdField* const time = header.time ? &header.fields[*header.time] : nullptr;
+  const auto time_offset =
+      time ? static_cast<std::size_t>(layout.field_offset[*header.time]) : std::size_t{0};
   const auto n = static_cast<std::size_t>(header.points);
   sink.reserve(n, n);
   for (std::size_t i = 0; i < n; ++i) {
     const char* const point = base + i * step;
-    sink.add(load_pcd_coordinate(point + offset[0], size[0]),
-             load_pcd_coordinate(point + offset[1], size[1]),
-             load_pcd_coordinate(point + offset[2], size[2]));
+    const double x = load_pcd_coordinate(point + offset[0], size[0]);
+    const double y = load_pcd_coordinate(point + offset[1], size[1]);
+    const double z = load_pcd_coordinate(point + offset[2], size[2]);
+    if (time) {
+      sink.add(x, y, z, load_pcd_time_s(point + time_offset, *time));
+    } else {
+      sink.add(x, y, z);
+    }
   }
 }
 
@@ -432,6 +500,34 @@ std::optional<std::uint64_t> lzf_output_size(std::string_view block) {
     out += length + 2;
   }
   return out;
+}
+
+// The points of decompressed data, stored as structure of arrays: all values of the first
+// field, then all of the second, ...
+void add_pcd_columns(const PcdHeader& header, const PcdLayout& layout, const std::vector<char>& raw,
+                     PointSink& sink) {
+  const auto n = static_cast<std::size_t>(header.points);
+  std::array<const char*, 3> column{};
+  std::array<std::size_t, 3> size{};
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    const std::size_t field = header.xyz[axis];
+    column[axis] = raw.data() + n * static_cast<std::size_t>(layout.field_offset[field]);
+    size[axis] = header.fields[field].size;
+  }
+  const PcdField* const time = header.time ? &header.fields[*header.time] : nullptr;
+  const char* const times =
+      time ? raw.data() + n * static_cast<std::size_t>(layout.field_offset[*header.time]) : nullptr;
+  sink.reserve(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = load_pcd_coordinate(column[0] + i * size[0], size[0]);
+    const double y = load_pcd_coordinate(column[1] + i * size[1], size[1]);
+    const double z = load_pcd_coordinate(column[2] + i * size[2], size[2]);
+    if (time) {
+      sink.add(x, y, z, load_pcd_time_s(times + i * time->size, *time));
+    } else {
+      sink.add(x, y, z);
+    }
+  }
 }
 
 void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::string_view data,
@@ -481,21 +577,7 @@ void read_pcd_compressed(const std::string& name, const PcdHeader& header, std::
                        : "LZF data decompress to " + std::to_string(got) + " bytes, expected " +
                              std::to_string(uncompressed));
   }
-  // Structure of arrays: all values of the first field, then all of the second, ...
-  const auto n = static_cast<std::size_t>(header.points);
-  std::array<const char*, 3> column{};
-  std::array<std::size_t, 3> size{};
-  for (std::size_t axis = 0; axis < 3; ++axis) {
-    const std::size_t field = header.xyz[axis];
-    column[axis] = raw.data() + n * static_cast<std::size_t>(layout.field_offset[field]);
-    size[axis] = header.fields[field].size;
-  }
-  sink.reserve(n, n);
-  for (std::size_t i = 0; i < n; ++i) {
-    sink.add(load_pcd_coordinate(column[0] + i * size[0], size[0]),
-             load_pcd_coordinate(column[1] + i * size[1], size[1]),
-             load_pcd_coordinate(column[2] + i * size[2], size[2]));
-  }
+  add_pcd_columns(header, layout, raw, sink);
 }
 
 }  // namespace
@@ -504,6 +586,7 @@ void read_pcd(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   const PcdHeader header = parse_pcd_header(name, cursor);
   sink.result().points_in_file = static_cast<std::size_t>(header.points);
+  if (header.time) sink.record_times();
   switch (header.data) {
     case PcdData::ascii:
       read_pcd_ascii(name, header, cursor, sink);
@@ -518,16 +601,22 @@ void read_pcd(const std::string& name, std::string_view data, PointSink& sink) {
 }
 
 std::string pcd_text(const PointCloud& cloud, Encoding encoding) {
+  // A cloud with times gets a float field `time` (seconds), which the reader reads back.
+  const bool times = cloud.has_times();
+  const auto with_time = [&](const std::string& xyz, const std::string& time) {
+    return times ? xyz + " " + time : xyz;
+  };
   const std::string n = std::to_string(cloud.size());
-  const std::string sizes = written_in_double(cloud) ? "SIZE 8 8 8\n" : "SIZE 4 4 4\n";
-  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\n" +
-                    sizes + "TYPE F F F\nCOUNT 1 1 1\nWIDTH " + n +
-                    "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + n + "\nDATA " +
+  const std::string sizes = written_in_double(cloud) ? "8 8 8" : "4 4 4";
+  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " +
+                    with_time("x y z", "time") + "\nSIZE " + with_time(sizes, "4") + "\nTYPE " +
+                    with_time("F F F", "F") + "\nCOUNT " + with_time("1 1 1", "1") + "\nWIDTH " +
+                    n + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + n + "\nDATA " +
                     (encoding == Encoding::ascii ? "ascii" : "binary") + "\n";
   if (encoding == Encoding::ascii) {
-    append_points_text(out, cloud);
+    append_points_text(out, cloud, times);
   } else {
-    append_points_binary(out, cloud);
+    append_points_binary(out, cloud, times);
   }
   return out;
 }

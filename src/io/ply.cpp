@@ -100,6 +100,7 @@ struct PlyHeader {
   std::vector<PlyElement> elements;
   std::size_t vertex = 0;            // index of the vertex element
   std::array<std::size_t, 3> xyz{};  // property index of x, y, z in it
+  std::optional<std::size_t> time;   // property index of the per-point time in it, if any
   std::size_t data_offset = 0;
   std::size_t end_line = 0;  // line of end_header
 };
@@ -218,6 +219,30 @@ std::array<std::size_t, 3> find_ply_xyz(const std::string& name, const PlyElemen
   return xyz;
 }
 
+// Property index of the per-point time in the vertex element (docs/io.md, "Per-point times"):
+// a scalar, named once.
+std::optional<std::size_t> find_ply_time(const std::string& name, const PlyElement& vertex) {
+  const auto& props = vertex.properties;
+  const auto time = find_time_field(
+      props.size(), [&](std::size_t i) -> std::string_view { return props[i].name; });
+  if (!time) return std::nullopt;
+  const PlyProperty& property = props[*time];
+  if (std::count_if(props.begin(), props.end(),
+                    [&](const PlyProperty& p) { return p.name == property.name; }) > 1) {
+    fail_line(name, vertex.line, "vertex property '" + property.name + "' appears twice");
+  }
+  if (property.is_list) {
+    fail_line(name, vertex.line,
+              "vertex property '" + property.name + "' (the per-point time) is a list");
+  }
+  return time;
+}
+
+// Seconds per unit of a time property: an integer counts nanoseconds.
+double ply_time_unit_s(PlyType type) {
+  return time_field_unit_s(type != PlyType::f32 && type != PlyType::f64);
+}
+
 PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
   PlyHeader header;
   std::string_view line;
@@ -228,6 +253,7 @@ PlyHeader parse_ply_header(const std::string& name, TextCursor& cursor) {
   header.vertex = find_ply_vertex(name, header);
   const PlyElement& vertex = header.elements[header.vertex];
   header.xyz = find_ply_xyz(name, vertex);
+  header.time = find_ply_time(name, vertex);
   if (beyond_cloud_limit(vertex.count)) {
     fail_line(name, vertex.line, "element vertex: " + cloud_limit_text(vertex.count));
   }
@@ -260,7 +286,7 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
         }
         return token;
       };
-      std::array<double, 3> p{};
+      std::array<double, 4> p{};  // x, y, z and the time
       for (std::size_t k = 0; k < element.properties.size(); ++k) {
         const PlyProperty& property = element.properties[k];
         const std::string_view value = next();
@@ -287,15 +313,21 @@ void read_ply_ascii(const std::string& name, const PlyHeader& header, TextCursor
         }
         check(property.type, value);
         if (is_vertex) {
-          for (std::size_t axis = 0; axis < 3; ++axis) {
-            if (header.xyz[axis] == k && !parse_number(value, p[axis])) {
+          for (std::size_t w = 0; w < 4; ++w) {
+            const bool wanted = w < 3 ? header.xyz[w] == k : header.time == k;
+            if (wanted && !parse_number(value, p[w])) {
               fail_line(name, cursor.line(),
                         shown(value) + " is not a number (property '" + property.name + "')");
             }
           }
         }
       }
-      if (is_vertex) sink.add(p[0], p[1], p[2]);
+      if (is_vertex && header.time) {
+        const PlyType time_type = element.properties[*header.time].type;
+        sink.add(p[0], p[1], p[2], p[3] * ply_time_unit_s(time_type));
+      } else if (is_vertex) {
+        sink.add(p[0], p[1], p[2]);
+      }
     }
   }
   if (cursor.next_token(token)) {
@@ -325,9 +357,14 @@ class PlyBinaryReader {
         sink_(sink),
         big_endian_(header.encoding == PlyEncoding::binary_big_endian),
         pos_(header.data_offset) {
+    const PlyElement& vertex = header.elements[header.vertex];
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      xyz_type_[axis] = header.elements[header.vertex].properties[header.xyz[axis]].type;
+      wanted_[axis] = header.xyz[axis];
+      xyz_type_[axis] = vertex.properties[header.xyz[axis]].type;
     }
+    // Without a time, x stands in for it: its position is found but never read as a time.
+    wanted_[3] = header.time.value_or(header.xyz[0]);
+    if (header.time) time_type_ = vertex.properties[*header.time].type;
   }
 
   void read() {
@@ -358,15 +395,15 @@ class PlyBinaryReader {
                     element.name + " data, have " + std::to_string(available) + ")");
     }
     if (is_vertex) {
-      std::array<std::size_t, 3> xyz_offset{};  // offset of x, y, z in a vertex record
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        for (std::size_t k = 0; k < header_.xyz[axis]; ++k) {
-          xyz_offset[axis] += ply_size(element.properties[k].type);
+      std::array<std::size_t, 4> offset{};  // of x, y, z and the time in a vertex record
+      for (std::size_t w = 0; w < 4; ++w) {
+        for (std::size_t k = 0; k < wanted_[w]; ++k) {
+          offset[w] += ply_size(element.properties[k].type);
         }
       }
       const auto n = static_cast<std::size_t>(element.count);
       sink_.reserve(n, n);
-      for (std::size_t i = 0; i < n; ++i) add_vertex(data_.data() + pos_ + i * stride, xyz_offset);
+      for (std::size_t i = 0; i < n; ++i) add_vertex(data_.data() + pos_ + i * stride, offset);
     }
     pos_ += static_cast<std::size_t>(*need);
   }
@@ -375,21 +412,21 @@ class PlyBinaryReader {
   void read_with_lists(const PlyElement& element, bool is_vertex) {
     if (is_vertex) sink_.reserve(element.count, (data_.size() - pos_) / 3);
     for (std::uint64_t r = 0; r < element.count; ++r) {
-      const std::array<std::size_t, 3> xyz_at = walk_record(element, r);
-      if (is_vertex) add_vertex(data_.data(), xyz_at);
+      const std::array<std::size_t, 4> at = walk_record(element, r);
+      if (is_vertex) add_vertex(data_.data(), at);
     }
   }
 
-  // Steps over record r of an element; returns the byte positions of its x, y, z properties
-  // (meaningful for a vertex record only).
-  std::array<std::size_t, 3> walk_record(const PlyElement& element, std::uint64_t r) {
-    std::array<std::size_t, 3> xyz_at{};
+  // Steps over record r of an element; returns the byte positions of its x, y, z and time
+  // properties (meaningful for a vertex record only).
+  std::array<std::size_t, 4> walk_record(const PlyElement& element, std::uint64_t r) {
+    std::array<std::size_t, 4> wanted_at{};
     for (std::size_t k = 0; k < element.properties.size(); ++k) {
       const PlyProperty& property = element.properties[k];
       if (!property.is_list) {
         const std::size_t at = take(element, r, ply_size(property.type));
-        for (std::size_t axis = 0; axis < 3; ++axis) {
-          if (header_.xyz[axis] == k) xyz_at[axis] = at;
+        for (std::size_t w = 0; w < 4; ++w) {
+          if (wanted_[w] == k) wanted_at[w] = at;
         }
         continue;
       }
@@ -401,7 +438,7 @@ class PlyBinaryReader {
       const auto bytes = checked_mul(static_cast<std::uint64_t>(length), ply_size(property.type));
       take(element, r, bytes ? *bytes : std::numeric_limits<std::uint64_t>::max());
     }
-    return xyz_at;
+    return wanted_at;
   }
 
   // Steps over the next bytes of record r; returns where they start.
@@ -416,11 +453,17 @@ class PlyBinaryReader {
     return start;
   }
 
-  // The vertex whose x, y, z values are at base + offset.
-  void add_vertex(const char* base, const std::array<std::size_t, 3>& offset) {
-    sink_.add(ply_value(xyz_type_[0], base + offset[0], big_endian_),
-              ply_value(xyz_type_[1], base + offset[1], big_endian_),
-              ply_value(xyz_type_[2], base + offset[2], big_endian_));
+  // The vertex whose x, y, z and time values are at base + offset.
+  void add_vertex(const char* base, const std::array<std::size_t, 4>& offset) {
+    const double x = ply_value(xyz_type_[0], base + offset[0], big_endian_);
+    const double y = ply_value(xyz_type_[1], base + offset[1], big_endian_);
+    const double z = ply_value(xyz_type_[2], base + offset[2], big_endian_);
+    if (time_type_) {
+      const double time = ply_value(*time_type_, base + offset[3], big_endian_);
+      sink_.add(x, y, z, time * ply_time_unit_s(*time_type_));
+    } else {
+      sink_.add(x, y, z);
+    }
   }
 
   const std::string& name_;
@@ -428,8 +471,10 @@ class PlyBinaryReader {
   std::string_view data_;
   PointSink& sink_;
   bool big_endian_;
-  std::size_t pos_;                    // the next byte to read
-  std::array<PlyType, 3> xyz_type_{};  // type of x, y, z in the vertex element
+  std::size_t pos_;                      // the next byte to read
+  std::array<std::size_t, 4> wanted_{};  // property index of x, y, z and the time in a vertex
+  std::array<PlyType, 3> xyz_type_{};    // type of x, y, z in the vertex element
+  std::optional<PlyType> time_type_;     // type of the time, if the vertices have one
 };
 
 void read_ply_binary(const std::string& name, const PlyHeader& header, std::string_view data,
@@ -443,6 +488,7 @@ void read_ply(const std::string& name, std::string_view data, PointSink& sink) {
   TextCursor cursor(data, 0, 1);
   const PlyHeader header = parse_ply_header(name, cursor);
   sink.result().points_in_file = static_cast<std::size_t>(header.elements[header.vertex].count);
+  if (header.time) sink.record_times();
   if (header.encoding == PlyEncoding::ascii) {
     read_ply_ascii(name, header, cursor, sink);
   } else {
@@ -451,16 +497,18 @@ void read_ply(const std::string& name, std::string_view data, PointSink& sink) {
 }
 
 std::string ply_text(const PointCloud& cloud, Encoding encoding) {
+  // A cloud with times gets a float property `time` (seconds), which the reader reads back.
+  const bool times = cloud.has_times();
   const std::string type = written_in_double(cloud) ? "double" : "float";
   std::string out = "ply\nformat ";
   out += encoding == Encoding::ascii ? "ascii" : "binary_little_endian";
   out += " 1.0\ncomment written by sgdicp\nelement vertex " + std::to_string(cloud.size()) +
-         "\nproperty " + type + " x\nproperty " + type + " y\nproperty " + type +
-         " z\nend_header\n";
+         "\nproperty " + type + " x\nproperty " + type + " y\nproperty " + type + " z\n" +
+         (times ? "property float time\n" : "") + "end_header\n";
   if (encoding == Encoding::ascii) {
-    append_points_text(out, cloud);
+    append_points_text(out, cloud, times);
   } else {
-    append_points_binary(out, cloud);
+    append_points_binary(out, cloud, times);
   }
   return out;
 }

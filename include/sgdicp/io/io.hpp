@@ -8,7 +8,9 @@
 //
 // Readers are strict and bounds-checked: a truncated or malformed file raises FormatError whose
 // message names the file and where it broke (line number for text, byte offset for binary).
-// Points with a non-finite coordinate are dropped and counted, never returned.
+// Points with a non-finite coordinate are dropped and counted, never returned. PCD and PLY files
+// with a per-point time field (Ouster t, Livox offset_time, Velodyne time, Hesai timestamp) fill
+// PointCloud::times_s (docs/io.md, "Per-point times").
 //
 // Resources are bounded by the input: every count or size a header claims is checked against the
 // bytes that are really there before anything is allocated, and no input larger than
@@ -77,7 +79,8 @@ struct ReadResult {
   FileFormat format = FileFormat::automatic;  ///< the format that was read
 };
 
-/// Reads the x y z of every point of a file. Throws IoError (cannot open/read) or FormatError.
+/// Reads the x y z of every point of a file, and each point's time when a PCD or PLY file has a
+/// time field. Throws IoError (cannot open/read) or FormatError.
 [[nodiscard]] ReadResult read_point_cloud(const std::filesystem::path& path,
                                           FileFormat format = FileFormat::automatic);
 
@@ -102,7 +105,8 @@ constexpr std::string_view enum_noun(Encoding) {
   return "encoding";
 }
 
-/// Writes x y z of every point as PLY, PCD or XYZ (chosen from the extension unless given).
+/// Writes x y z of every point as PLY, PCD or XYZ (chosen from the extension unless given), and
+/// in PLY and PCD each point's time as a float field `time` (seconds) when the cloud has times.
 /// Binary PLY is little endian, binary PCD is uncompressed "binary". Throws IoError.
 void write_point_cloud(const std::filesystem::path& path, const PointCloud& cloud,
                        FileFormat format = FileFormat::automatic,
