@@ -17,6 +17,8 @@
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/transform_io.hpp"
 #include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/registration/deskew.hpp"
+#include "sgdicp/surfaces/prepare_reference.hpp"
 #include "sgdicp/tools/render.hpp"
 
 namespace sgdicp::cli {
@@ -33,6 +35,7 @@ struct RegisterOptions {
   std::string trace;
   std::string samples;
   bool json = false;
+  bool deskew = false;
   SettingsOptions settings;
   /// The global registration's options (global_settings_table), only with --init global.
   OptionValues global;
@@ -100,15 +103,37 @@ void check_options(const RegisterOptions& o, const MethodSpec& method) {
   }
 }
 
-// The files asked for: transform, trace, samples, aligned cloud, picture.
+// --deskew: the sweep registered again with its times, from the rigid pose: the pose of its
+// middle and the velocity within it (deskew.hpp).
+std::optional<DeskewedRegistration> deskew_source(const RegisterOptions& o,
+                                                  const PointCloud& source,
+                                                  const PointCloud& reference_cloud,
+                                                  const RegistrationResult& rigid) {
+  if (!o.deskew) return std::nullopt;
+  if (!source.has_times()) {
+    throw InvalidInputError(o.source +
+                            ": --deskew needs each point's time (a PCD/PLY time field: t, "
+                            "offset_time, time or timestamp, docs/io.md); this file has none");
+  }
+  ReferenceIndex index = reference_index_for(reference_cloud, SgdSettings{});
+  prepare_reference(index, CostType::point_to_plane);
+  return align_deskewed(source, source.times_s, index, rigid.T_reference_source);
+}
+
+// The files asked for: transform, trace, samples, aligned cloud (every source point in input
+// order, deskewed when --deskew), picture.
 void write_outputs(const RegisterOptions& o, const PointCloud& source,
-                   const PointCloud& reference_cloud, const RegistrationResult& result) {
+                   const PointCloud& reference_cloud, const RegistrationResult& result,
+                   const std::optional<DeskewedRegistration>& deskewed) {
   if (!o.output.empty()) write_transform(o.output, result.T_reference_source);
   if (!o.trace.empty()) write_trace_csv(o.trace, result);
   if (!o.samples.empty()) write_samples(o.samples, result);
   if (!o.aligned.empty()) {
-    write_point_cloud(o.aligned,
-                      transformed(source, result.T_reference_source, reference_cloud.origin_m));
+    write_point_cloud(
+        o.aligned, deskewed
+                       ? rebased(deskewed_in_reference(source, source.times_s, *deskewed),
+                                 reference_cloud.origin_m)
+                       : transformed(source, result.T_reference_source, reference_cloud.origin_m));
   }
   if (!o.picture.empty()) {
     render_alignment_png(o.picture, reference_cloud, source, result.T_reference_source);
@@ -116,9 +141,18 @@ void write_outputs(const RegisterOptions& o, const PointCloud& source,
 }
 
 void print_json(const MethodSpec& method, const MethodRun& run,
-                const std::optional<Eigen::Matrix4d>& T_gt) {
+                const std::optional<Eigen::Matrix4d>& T_gt,
+                const std::optional<DeskewedRegistration>& deskewed) {
   const RegistrationResult& result = run.result;
   nlohmann::json j = result_to_json(result);
+  if (deskewed) {
+    j["deskew"] = {
+        {"velocity", std::vector<double>(deskewed->velocity.data(), deskewed->velocity.data() + 6)},
+        {"mid_time_s", deskewed->mid_time_s},
+        {"converged", deskewed->converged},
+        {"iterations", deskewed->iterations},
+        {"message", deskewed->message}};
+  }
   j["build_ms"] = run.prepare_ms;
   j["method"] = method.name;
   if (T_gt) {
@@ -182,6 +216,15 @@ void warn_if_doubtful(const RegistrationResult& result) {
   }
 }
 
+void print_deskew(const DeskewedRegistration& d) {
+  std::cout << std::setprecision(4) << "deskew: " << d.message << " (" << d.iterations
+            << " iterations); the transform is the pose at the sweep's middle, "
+            << format_number(d.mid_time_s) << " s; velocity " << d.velocity.head<3>().transpose()
+            << " m/s, " << (d.velocity.tail<3>() * 180.0 / std::numbers::pi).transpose()
+            << " deg/s (sensor frame)\n";
+  if (!d.converged) std::cerr << "warning: the deskewing did not converge: " << d.message << '\n';
+}
+
 void print_global(const RegistrationResult& r) {
   std::cout << std::setprecision(3) << "global: hypothesis " << r.global_winner_rank << " of "
             << r.global_hypotheses << " won, overlap " << r.global_score << ", runner-up "
@@ -220,13 +263,18 @@ void run(const RegisterOptions& o) {
   const MethodRun run = global
                             ? run_method_global(method, source, reference_cloud, global_settings)
                             : run_method(method, source, reference_cloud, T_init, !o.trace.empty());
-  const RegistrationResult& result = run.result;
-  write_outputs(o, source, reference_cloud, result);
+  const std::optional<DeskewedRegistration> deskewed =
+      deskew_source(o, source, reference_cloud, run.result);
+  MethodRun shown = run;  // with --deskew, the pose of the sweep's middle
+  if (deskewed) shown.result.T_reference_source = deskewed->T_reference_source;
+  const RegistrationResult& result = shown.result;
+  write_outputs(o, source, reference_cloud, result, deskewed);
 
   if (o.json) {
-    print_json(method, run, T_gt);
+    print_json(method, shown, T_gt, deskewed);
   } else {
-    print_text(o, method, run, source.size(), T_gt);
+    print_text(o, method, shown, source.size(), T_gt);
+    if (deskewed) print_deskew(*deskewed);
   }
   if (global && !result.global_reliable) throw ExitStatus(result.message, kExitNoGlobalSolution);
 }
@@ -257,7 +305,14 @@ void add_register_command(CLI::App& app) {
                 "iterations, points_processed, time_ms, inliers, ...) instead of text");
   cmd->add_option("--output,-o", o->output, "Write the 4x4 transform to this file");
   cmd->add_option("--aligned", o->aligned,
-                  "Write the moved source cloud to this file (.ply, .pcd or .xyz)");
+                  "Write the moved source cloud to this file (.ply, .pcd or .xyz): every point in "
+                  "input order, deskewed with --deskew");
+  cmd->add_flag(
+      "--deskew", o->deskew,
+      "The source is a sweep measured while the sensor moved: estimate the velocity "
+      "within it together with its pose, from each point's time (a PCD/PLY time "
+      "field); the transform is then the pose at the sweep's middle (docs/registration.md, "
+      "Moving sensors) [default: off]");
   cmd->add_option("--picture", o->picture,
                   "Write a PNG (the name must end in .png) of the reference and the aligned "
                   "source (top and side view)");

@@ -1562,6 +1562,9 @@ class ReadResult:
         georeferenced coordinates, which float32 cannot hold: docs/io.md).
         """
     @property
+    def times(self) -> npt.NDArray[np.float32] | None:
+        """Synced."""
+    @property
     def points_in_file(self) -> int:
         """Points the file declares or contains (= N + non_finite_dropped)."""
     @property
@@ -1846,7 +1849,9 @@ class Odometry:
     ) -> npt.NDArray[np.float64]:
         """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),
         and returns its (4, 4) pose in the first frame's coordinates (the first frame: the
-        identity). A frame that fails (see last_report) gets the predicted pose.
+        identity). times: None, or each point's time (N,), seconds, any origin: the frame is then
+        deskewed (deskew='auto', docs/odometry.md). A frame that fails (see last_report) gets the
+        predicted pose.
         """
     def skip_frame(self, message: str) -> npt.NDArray[np.float64]:
         """Records a frame that could not be read: it gets the predicted pose and a failed report

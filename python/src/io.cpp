@@ -36,6 +36,7 @@ Encoding encoding_from_object(const py::handle& value) {
 
 struct ReadPoints {
   py::array points;  // float32, or float64 for a georeferenced cloud
+  py::object times;  // (N,) float32 seconds, or None
   std::size_t points_in_file = 0;
   std::size_t non_finite_dropped = 0;
   std::string format;
@@ -47,7 +48,12 @@ ReadPoints read_points_with_info(const std::filesystem::path& path, const py::ha
     const py::gil_scoped_release release;
     return read_point_cloud(path, f);
   }();
-  return ReadPoints{array_from_cloud(std::move(read.cloud)), read.points_in_file,
+  py::object times = py::none();
+  if (read.cloud.has_times()) {
+    times = py::array_t<float>(static_cast<py::ssize_t>(read.cloud.times_s.size()),
+                               read.cloud.times_s.data());
+  }
+  return ReadPoints{array_from_cloud(std::move(read.cloud)), std::move(times), read.points_in_file,
                     read.non_finite_dropped, to_string(read.format)};
 }
 
@@ -58,6 +64,10 @@ void bind_io(py::module_& m) {
       .def_readonly("points", &ReadPoints::points,
                     "(N, 3) float32 array of the finite points, in file order, metres (float64 for "
                     "georeferenced coordinates, which float32 cannot hold: docs/io.md).")
+      .def_readonly("times", &ReadPoints::times,
+                    "(N,) float32 array of each point's time, seconds from the earliest, when the "
+                    "file has a per-point time field (docs/io.md, Per-point times), else None: "
+                    "give it to Odometry.register_frame(points, times=...).")
       .def_readonly("points_in_file", &ReadPoints::points_in_file,
                     "Points the file declares or contains (= N + non_finite_dropped).")
       .def_readonly("non_finite_dropped", &ReadPoints::non_finite_dropped,

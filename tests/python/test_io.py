@@ -67,3 +67,16 @@ def test_metrics():
     assert sgd_icp.translation_error(T_est.tolist(), T_gt) == sgd_icp.translation_error(T_est, T_gt)
     with pytest.raises(ValueError, match=r"T_est must be a \(4, 4\) transform, got shape \(3, 4\)"):
         sgd_icp.translation_error(T_est[:3], T_gt)
+
+
+def test_a_time_field_is_read_as_times(tmp_path):
+    path = tmp_path / "sweep.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                    "property float z\nproperty uint t\nend_header\n"
+                    "1 0 0 50000000\nnan 0 0 0\n0 1 0 100000000\n")
+    read = sgd_icp.read_point_cloud(path)
+    assert read.points.shape == (2, 3)
+    np.testing.assert_allclose(read.times, [0.0, 0.05], atol=1e-9)  # ns -> s, from the earliest
+    plain = tmp_path / "plain.xyz"
+    plain.write_text("1 0 0\n0 1 0\n")
+    assert sgd_icp.read_point_cloud(plain).times is None

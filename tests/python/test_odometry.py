@@ -306,3 +306,24 @@ def test_a_localizer_places_frames_in_a_fixed_map_and_loses_what_it_does_not_hol
         sgd_icp.Localizer(np.full((5, 3), np.nan))
     with pytest.raises(sgd_icp.InvalidInputError, match="not finite"):
         sgd_icp.Localizer(world, init=np.full((4, 4), np.nan))
+
+
+def test_frames_with_times_are_deskewed_and_bad_times_refused():
+    clouds, _ = sequence(3)
+    times = [np.linspace(0.0, 0.1, len(c)) for c in clouds]
+    plain, timed, off = sgd_icp.Odometry(), sgd_icp.Odometry(), sgd_icp.Odometry(deskew="none")
+    for cloud, t in zip(clouds, times):
+        plain.register_frame(cloud)
+        timed.register_frame(cloud, times=t)
+        off.register_frame(cloud, times=t)
+    # The first two frames are registered as measured; the third is deskewed by the predicted
+    # motion (a sequence that moves), unless deskew="none".
+    np.testing.assert_array_equal(off.poses, plain.poses)
+    np.testing.assert_array_equal(timed.poses[:2], plain.poses[:2])
+    assert not np.array_equal(timed.poses[2], plain.poses[2])
+    with pytest.raises(sgd_icp.InvalidInputError, match="one per point"):
+        timed.register_frame(clouds[0], times=np.zeros(5))
+    with pytest.raises(sgd_icp.InvalidInputError, match="not finite"):
+        timed.register_frame(clouds[0], times=np.full(len(clouds[0]), np.nan))
+    with pytest.raises(sgd_icp.InvalidSettingsError, match="deskew mode"):
+        sgd_icp.Odometry(deskew="sideways")
