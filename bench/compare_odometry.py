@@ -31,7 +31,8 @@ queries in two halves from 2, and the surfaces of a frame's points that enter th
 KISS-ICP's `max_num_threads`: both sides on the same number of threads.
 
 KISS-ICP (pip kiss-icp) is configured for each sensor: deskewing off (the scans come without
-per-point times and sgd-icp does not deskew); max range 100 m for
+per-point times), on with `--deskew azimuth` (both sides then take each point's time from its
+azimuth, KISS-ICP's rule for KITTI); max range 100 m for
 LiDAR (its default), 5 m for the Kinect with initial threshold 0.1 m and min motion 0.005 m (its
 LiDAR defaults, 2 m and 0.1 m, are larger than the whole motion); voxel its own rule (max range /
 100), and with --kiss-our-voxel once more with sgd-icp's voxel size. sgd-icp runs with its
@@ -210,9 +211,16 @@ def kiss_reader(seq: Sequence) -> Callable[[Path], np.ndarray]:
     return read
 
 
-def run_ours(seq: Sequence, method: str, threads: int) -> tuple[np.ndarray, float, float, int]:
+def azimuth_times(points: np.ndarray) -> np.ndarray:
+    """Each point's place in a clockwise sweep from behind, in [0, 1] (sgd_icp's
+    azimuth_times_s, KISS-ICP's rule for KITTI)."""
+    return 0.5 * (1.0 - np.arctan2(points[:, 1], points[:, 0]) / np.pi)
+
+
+def run_ours(seq: Sequence, method: str, threads: int,
+             deskew: str = "auto") -> tuple[np.ndarray, float, float, int]:
     start = time.perf_counter()
-    odometry = sgd_icp.Odometry(method=method, threads=threads)
+    odometry = sgd_icp.Odometry(method=method, threads=threads, deskew=deskew)
     for f in seq.files:
         odometry.register_frame(
             sgd_icp.read_depth_image(f, seq.intrinsics) if seq.kinect else sgd_icp.read_points(f)
@@ -221,12 +229,13 @@ def run_ours(seq: Sequence, method: str, threads: int) -> tuple[np.ndarray, floa
     return odometry.poses, wall, odometry.voxel_size, odometry.recovered_frames
 
 
-def run_kiss(seq: Sequence, voxel_size: float | None, threads: int) -> tuple[np.ndarray, float]:
+def run_kiss(seq: Sequence, voxel_size: float | None, threads: int,
+             deskew: bool = False) -> tuple[np.ndarray, float]:
     from kiss_icp.config import load_config
     from kiss_icp.kiss_icp import KissICP
 
     config = load_config(None)
-    config.data.deskew = False
+    config.data.deskew = deskew
     config.registration.max_num_threads = threads
     if seq.kinect:
         config.data.max_range = 5.0
@@ -241,7 +250,7 @@ def run_kiss(seq: Sequence, voxel_size: float | None, threads: int) -> tuple[np.
     poses = []
     for f in seq.files:
         points = read(f)
-        odometry.register_frame(points, np.zeros(len(points)))
+        odometry.register_frame(points, azimuth_times(points) if deskew else np.zeros(len(points)))
         poses.append(odometry.last_pose.copy())
     return np.array(poses), time.perf_counter() - start
 
@@ -274,6 +283,10 @@ def main() -> None:
                         help="comma-separated seeds: for each, every next frame is 1 to --steps "
                         "frames on, drawn at random (dropped frames, an unsteady rate) "
                         "[default: none, every step-th frame]")
+    parser.add_argument("--deskew", default="auto", choices=["auto", "none", "azimuth"],
+                        help="sgd-icp's deskew= (auto: frames with times; none; azimuth: times "
+                             "from each point's azimuth, KITTI's sweeps); azimuth also turns "
+                             "KISS-ICP's deskewing on with the same times [default: auto]")
     parser.add_argument("--threads", type=int, default=1,
                         help="sgd-icp's num_threads and KISS-ICP's max_num_threads [default: 1]")
     parser.add_argument("--kiss-our-voxel", action="store_true",
@@ -299,11 +312,12 @@ def main() -> None:
             for _ in range(max(args.repeats, 1)):
                 voxel = None
                 for method in args.methods.split(","):
-                    poses, wall, voxel, recovered = run_ours(seq, method, args.threads)
+                    poses, wall, voxel, recovered = run_ours(seq, method, args.threads,
+                                                             args.deskew)
                     record(f"sgd-icp {method}", poses, wall,
                            f"voxel {voxel:.3f} m, {recovered} recovered")
                 for v in [] if args.no_kiss else [None] + ([voxel] if args.kiss_our_voxel else []):
-                    poses, wall = run_kiss(seq, v, args.threads)
+                    poses, wall = run_kiss(seq, v, args.threads, args.deskew == "azimuth")
                     record("KISS-ICP" if v is None else f"KISS-ICP voxel {v:.3f} m", poses, wall,
                            "its voxel rule" if v is None else f"voxel {v:.3f} m")
             kiss_wall = float(np.median(sides["KISS-ICP"][1])) if "KISS-ICP" in sides else None

@@ -1563,7 +1563,10 @@ class ReadResult:
         """
     @property
     def times(self) -> npt.NDArray[np.float32] | None:
-        """Synced."""
+        """(N,) float32 array of each point's time, seconds from the earliest, when the file has a
+        per-point time field (docs/io.md, Per-point times), else None: give it to
+        Odometry.register_frame(points, times=...).
+        """
     @property
     def points_in_file(self) -> int:
         """Points the file declares or contains (= N + non_finite_dropped)."""
