@@ -178,7 +178,10 @@ TEST(Deskew, ASweepUnderAKnownMotionIsCompensatedByThatMotion) {
 // KITTI's Velodyne turns clockwise seen from above: behind, left, ahead, right, behind.
 TEST(Deskew, AzimuthTimesTurnClockwiseFromBehind) {
   PointCloud c;
-  c.points = {{-1.0F, 1e-6F, 0.0F}, {0.0F, 1.0F, 0.0F}, {1.0F, 0.0F, 0.0F}, {0.0F, -1.0F, 0.0F},
+  c.points = {{-1.0F, 1e-6F, 0.0F},
+              {0.0F, 1.0F, 0.0F},
+              {1.0F, 0.0F, 0.0F},
+              {0.0F, -1.0F, 0.0F},
               {-1.0F, -1e-6F, 0.0F}};
   const std::vector<float> t = azimuth_times_s(c, 0.1);
   const std::vector<float> expected{0.0F, 0.025F, 0.05F, 0.075F, 0.1F};
