@@ -72,6 +72,16 @@ TEST(OdometryDeskew, ASkewedSequenceIsDeskewedByThePredictedMotion) {
   EXPECT_LT(rmse[1], 0.012);
 }
 
+TEST(OdometryDeskew, CroppingKeepsEachPointsTime) {
+  PointCloud c;
+  c.points = {
+      {1.0F, 0.0F, 0.0F}, {50.0F, 0.0F, 0.0F}, {std::nanf(""), 0.0F, 0.0F}, {0.0F, 3.0F, 0.0F}};
+  c.times_s = {0.01F, 0.02F, 0.03F, 0.04F};
+  const PointCloud cropped = crop_range(c, 0.5, 10.0);
+  ASSERT_EQ(cropped.size(), 2U);
+  EXPECT_EQ(cropped.times_s, (std::vector<float>{0.01F, 0.04F}));
+}
+
 // Frames without times, or whose times are all equal, are registered exactly as with deskewing
 // off (bit-identical poses).
 TEST(OdometryDeskew, FramesWithoutTimesOrEqualTimesAreRegisteredAsBefore) {

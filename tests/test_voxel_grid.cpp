@@ -56,6 +56,38 @@ PointCloud surface_volume_or_line(int kind) {
   return cloud;
 }
 
+// Times survive the thinning: each voxel's point gets the mean time of its points, in the
+// centroids' order, for any thread count; a cloud without times gives none.
+TEST(VoxelDownsample, EachVoxelGetsTheMeanTimeOfItsPoints) {
+  PointCloud c;
+  c.points = {{0.1F, 0.1F, 0.1F},
+              {5.1F, 0.1F, 0.1F},
+              {0.2F, 0.2F, 0.2F},
+              {5.3F, 0.3F, 0.3F},
+              {0.3F, 0.3F, 0.3F}};
+  c.times_s = {0.01F, 0.05F, 0.02F, 0.07F, 0.06F};
+  const PointCloud thin = voxel_downsample(c, 1.0);
+  ASSERT_EQ(thin.size(), 2U);
+  ASSERT_EQ(thin.times_s.size(), 2U);
+  EXPECT_NEAR(thin.times_s[0], 0.03F, 1e-7);  // (0.01 + 0.02 + 0.06) / 3, voxel (0, 0, 0) first
+  EXPECT_NEAR(thin.times_s[1], 0.06F, 1e-7);  // (0.05 + 0.07) / 2
+  std::mt19937_64 rng(3);
+  PointCloud big;
+  for (int i = 0; i < 50000; ++i) {
+    big.points.emplace_back(Eigen::Vector3d(test::uniform(rng, -10, 10),
+                                            test::uniform(rng, -10, 10), test::uniform(rng, 0, 2))
+                                .cast<float>());
+    big.times_s.push_back(static_cast<float>(test::uniform(rng, 0, 0.1)));
+  }
+  const PointCloud one = voxel_downsample(big, 0.5, 1);
+  const PointCloud two = voxel_downsample(big, 0.5, 2);
+  EXPECT_EQ(one.points, two.points);
+  EXPECT_EQ(one.times_s, two.times_s);
+  EXPECT_EQ(one.times_s.size(), one.size());
+  c.times_s.clear();
+  EXPECT_TRUE(voxel_downsample(c, 1.0).times_s.empty());
+}
+
 TEST(VoxelSizeForCount, KeepsAboutTheTargetOnSurfacesVolumesAndLines) {
   for (int kind = 0; kind < 3; ++kind) {
     const PointCloud cloud = surface_volume_or_line(kind);
