@@ -1250,6 +1250,18 @@ class RegistrationResult:
         """
 
 
+def register_sweep(
+    source: _Points, reference: _Points, times: npt.ArrayLike, init: _Transform | None = None
+) -> dict[str, Any]:
+    """Registers a sweep measured while the sensor moved (as `sgdicp register --deskew`): source (N,
+    3) with each point's time, times (N,) seconds (any origin), to reference (M, 3), from init (a
+    (4, 4) pose, or None). The pose and the sensor's constant velocity within the sweep are
+    estimated together (docs/registration.md, Moving sensors). Returns a dict: T_reference_source
+    (4, 4), the pose at the sweep's middle mid_time (seconds, in the times' clock); velocity
+    (6,), m/s then rad/s in the sensor's frame; converged, iterations, message; aligned (N, 3),
+    every source point in input order deskewed into the reference frame.
+    """
+
 def register(
     source: _Points,
     reference: Union[_Points, ReferenceIndex],

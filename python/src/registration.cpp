@@ -1,5 +1,6 @@
 // sgd_icp.register: SGD-ICP or a batch method on two clouds (arrays, Open3D clouds or a
 // ReferenceIndex), with a settings object and the flat keyword overrides; its docstring.
+#include <algorithm>
 #include <memory>
 #include <optional>
 #include <string>
@@ -9,8 +10,10 @@
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/global/global_registration.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
+#include "sgdicp/registration/deskew.hpp"
 #include "sgdicp/registration/methods.hpp"
 #include "sgdicp/registration/registration.hpp"
+#include "sgdicp/surfaces/prepare_reference.hpp"
 
 namespace sgdicp::python {
 
@@ -246,11 +249,58 @@ ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
   return needs_of(batch_settings_of(m, settings, rest), true);
 }
 
+// register_sweep: the rigid registration (the defaults) from init, then the pose and the velocity
+// within the sweep together (align_deskewed), as `sgdicp register --deskew`.
+py::dict register_sweep(const py::handle& source, const py::handle& reference,
+                        const py::handle& times, const py::object& init) {
+  ConvertedCloud src = cloud_from_array(source, "source", NonFinite::keep);
+  const auto t = py::cast<py::array_t<double, py::array::c_style | py::array::forcecast>>(times);
+  if (t.ndim() != 1 || static_cast<std::size_t>(t.shape(0)) != src.cloud.size()) {
+    throw InvalidInputError("times: one per source point, (" + std::to_string(src.cloud.size()) +
+                            ",), got " + std::to_string(t.size()) + " values");
+  }
+  const double earliest = t.size() > 0 ? *std::min_element(t.data(), t.data() + t.size()) : 0.0;
+  for (py::ssize_t i = 0; i < t.size(); ++i) {
+    src.cloud.times_s.push_back(static_cast<float>(t.data()[i] - earliest));
+  }
+  const Eigen::Matrix4d T_init =
+      init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
+  const PointCloud ref = cloud_from_array(reference, "reference", NonFinite::drop).cloud;
+  const auto [deskewed, aligned] = [&] {
+    const py::gil_scoped_release release;
+    ReferenceIndex index = reference_index_for(ref, SgdSettings{});
+    prepare_reference(index, CostType::point_to_plane);
+    const RegistrationResult rigid = align(src.cloud, index, SgdSettings{}, T_init);
+    const DeskewedRegistration d =
+        align_deskewed(src.cloud, src.cloud.times_s, index, rigid.T_reference_source);
+    return std::pair{d, deskewed_in_reference(src.cloud, src.cloud.times_s, d)};
+  }();
+  py::dict out;
+  out["T_reference_source"] = array_from_matrix(deskewed.T_reference_source);
+  out["velocity"] = py::array_t<double>(6, deskewed.velocity.data());
+  out["mid_time"] = deskewed.mid_time_s + earliest;
+  out["converged"] = deskewed.converged;
+  out["iterations"] = deskewed.iterations;
+  out["message"] = deskewed.message;
+  out["aligned"] = array_from_cloud(PointCloud(aligned));
+  return out;
+}
+
 void bind_registration(py::module_& m) {
   // The keyword lists come from the settings table; the docstring must outlive the module.
   static const std::string doc = register_doc(m);
   m.def("register", &register_clouds, doc.c_str(), "source"_a, "reference"_a, "init"_a = py::none(),
         "settings"_a = py::none(), "method"_a = "sgd");
+  m.def("register_sweep", &register_sweep, "source"_a, "reference"_a, "times"_a,
+        "init"_a = py::none(),
+        "Registers a sweep measured while the sensor moved (as `sgdicp register --deskew`): "
+        "source (N, 3) with each point's time, times (N,) seconds (any origin), to reference "
+        "(M, 3), from init (a (4, 4) pose, or None). The pose and the sensor's constant velocity "
+        "within the sweep are estimated together (docs/registration.md, Moving sensors). "
+        "Returns a dict: T_reference_source (4, 4), the pose at the sweep's middle mid_time "
+        "(seconds, in the times' clock); velocity (6,), m/s then rad/s in the sensor's frame; "
+        "converged, iterations, message; aligned (N, 3), every source point in input order "
+        "deskewed into the reference frame.");
 }
 
 }  // namespace sgdicp::python

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import sgd_icp
-from conftest import find_cli, make_transform, read_pairs, synthetic_scene, transformed
+from conftest import (find_cli, make_transform, read_pairs, shared_data_dir, synthetic_scene,
+                      transformed)
 
 DEG = np.pi / 180
 
@@ -344,3 +345,21 @@ def test_non_converged_run_is_reported(scene):
     source, reference, _ = scene
     r = sgd_icp.register(source, reference, max_iterations=5)
     assert not r.converged and r.stop_reason == "max_iterations" and r.iterations == 5
+
+
+NEWER = shared_data_dir() / "newer_college_ouster_skewed"
+
+
+@pytest.mark.skipif(not (NEWER / "raw_01.bin").is_file(), reason="no Newer College sweeps")
+def test_a_skewed_sweep_is_registered_with_its_times():
+    raw = np.fromfile(NEWER / "raw_01.bin", dtype="<f4").reshape(-1, 3)
+    times = np.fromfile(NEWER / "times_01.bin", dtype="<f4").astype(np.float64) + 1.7e9  # a clock
+    copy = np.fromfile(NEWER / "deskewed_01.bin", dtype="<f4").reshape(-1, 3)
+    turn = np.diag([-1.0, -1.0, 1.0, 1.0])  # the half turn between their frames (PROVENANCE)
+    r = sgd_icp.register_sweep(raw, copy, times, init=turn)
+    assert r["converged"], r["message"]
+    assert r["aligned"].shape == raw.shape
+    assert np.median(np.linalg.norm(r["aligned"] - copy, axis=1)) < 0.02  # rigid fit: 23 cm
+    assert abs(r["mid_time"] - 1.7e9 - 0.05) < 0.01 and r["velocity"].shape == (6,)
+    with pytest.raises(sgd_icp.InvalidInputError, match="one per source point"):
+        sgd_icp.register_sweep(raw, copy, times[:10])
