@@ -49,6 +49,18 @@ struct ConvertedCloud {
                                               NonFinite non_finite, bool allow_empty = false,
                                               const py::handle& normals = py::none());
 
+/// Per-point times given as an array: the times relative to the earliest (computed in double,
+/// so that absolute clocks keep their microseconds in float), and the earliest.
+struct TimesArray {
+  std::vector<float> relative_s;
+  double earliest_s = 0.0;
+};
+
+/// An (N,) array of times, seconds, one per point of a cloud of `count` points. Throws
+/// InvalidInputError for another shape or count, or a time that is not finite (or whose distance
+/// from the earliest float cannot hold).
+[[nodiscard]] TimesArray times_from_array(const py::handle& times, std::size_t count);
+
 /// An (N, 3) float32 array that takes over the cloud's storage (no copy); for a georeferenced
 /// cloud (origin_m not zero) a float64 array of origin + point, which float32 cannot hold.
 [[nodiscard]] py::array array_from_cloud(PointCloud&& cloud);

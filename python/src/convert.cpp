@@ -1,4 +1,5 @@
 // NumPy arrays <-> point clouds and transforms.
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -207,6 +208,26 @@ py::array_t<double> absolute_points(const PointCloud& cloud) {
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d p = cloud.points[i].cast<double>() + cloud.origin_m;
     for (int j = 0; j < 3; ++j) rows(static_cast<py::ssize_t>(i), j) = p[j];
+  }
+  return out;
+}
+
+TimesArray times_from_array(const py::handle& times, std::size_t count) {
+  const auto t = py::cast<py::array_t<double, py::array::c_style | py::array::forcecast>>(times);
+  if (t.ndim() != 1 || static_cast<std::size_t>(t.shape(0)) != count) {
+    throw InvalidInputError("times: one per point, (" + std::to_string(count) + ",), got " +
+                            std::to_string(t.size()) + " values");
+  }
+  const double* data = t.data();
+  TimesArray out;
+  out.earliest_s = count > 0 ? *std::min_element(data, data + t.size()) : 0.0;
+  out.relative_s.reserve(count);
+  for (py::ssize_t i = 0; i < t.size(); ++i) {
+    const double relative = data[i] - out.earliest_s;
+    if (!std::isfinite(relative) || relative > std::numeric_limits<float>::max()) {
+      throw InvalidInputError("times: a time is not finite (or too far from the earliest)");
+    }
+    out.relative_s.push_back(static_cast<float>(relative));
   }
   return out;
 }

@@ -106,20 +106,7 @@ py::array_t<double> stacked(const std::vector<Eigen::Matrix4d>& poses) {
 ConvertedCloud frame_with_times(const py::handle& points, const py::object& times) {
   if (times.is_none()) return cloud_from_array(points, "frame", NonFinite::drop, true);
   ConvertedCloud frame = cloud_from_array(points, "frame", NonFinite::keep, true);
-  const auto t = py::cast<py::array_t<double, py::array::c_style | py::array::forcecast>>(times);
-  if (t.ndim() != 1 || static_cast<std::size_t>(t.shape(0)) != frame.cloud.size()) {
-    throw InvalidInputError("times: one per point, (" + std::to_string(frame.cloud.size()) +
-                            ",), got " + std::to_string(t.size()) + " values");
-  }
-  const double* data = t.data();
-  if (!std::all_of(data, data + t.size(), [](double v) { return std::isfinite(v); })) {
-    throw InvalidInputError("times: a time is not finite");
-  }
-  const double earliest = t.size() > 0 ? *std::min_element(data, data + t.size()) : 0.0;
-  frame.cloud.times_s.reserve(frame.cloud.size());
-  for (py::ssize_t i = 0; i < t.size(); ++i) {
-    frame.cloud.times_s.push_back(static_cast<float>(data[i] - earliest));
-  }
+  frame.cloud.times_s = times_from_array(times, frame.cloud.size()).relative_s;
   return frame;
 }
 

@@ -254,15 +254,9 @@ ReferenceNeeds reference_needs(const Method& m, const py::handle& settings,
 py::dict register_sweep(const py::handle& source, const py::handle& reference,
                         const py::handle& times, const py::object& init) {
   ConvertedCloud src = cloud_from_array(source, "source", NonFinite::keep);
-  const auto t = py::cast<py::array_t<double, py::array::c_style | py::array::forcecast>>(times);
-  if (t.ndim() != 1 || static_cast<std::size_t>(t.shape(0)) != src.cloud.size()) {
-    throw InvalidInputError("times: one per source point, (" + std::to_string(src.cloud.size()) +
-                            ",), got " + std::to_string(t.size()) + " values");
-  }
-  const double earliest = t.size() > 0 ? *std::min_element(t.data(), t.data() + t.size()) : 0.0;
-  for (py::ssize_t i = 0; i < t.size(); ++i) {
-    src.cloud.times_s.push_back(static_cast<float>(t.data()[i] - earliest));
-  }
+  TimesArray t = times_from_array(times, src.cloud.size());
+  src.cloud.times_s = std::move(t.relative_s);
+  const double earliest = t.earliest_s;
   const Eigen::Matrix4d T_init =
       init.is_none() ? Eigen::Matrix4d::Identity() : matrix_from_array(init, "init");
   const PointCloud ref = cloud_from_array(reference, "reference", NonFinite::drop).cloud;

@@ -361,5 +361,5 @@ def test_a_skewed_sweep_is_registered_with_its_times():
     assert r["aligned"].shape == raw.shape
     assert np.median(np.linalg.norm(r["aligned"] - copy, axis=1)) < 0.02  # rigid fit: 23 cm
     assert abs(r["mid_time"] - 1.7e9 - 0.05) < 0.01 and r["velocity"].shape == (6,)
-    with pytest.raises(sgd_icp.InvalidInputError, match="one per source point"):
+    with pytest.raises(sgd_icp.InvalidInputError, match="one per point"):
         sgd_icp.register_sweep(raw, copy, times[:10])
