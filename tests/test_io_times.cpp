@@ -196,6 +196,25 @@ TEST_F(IoTest, PlyAsciiVelodyneFloatSecondsWithNaN) {
   expect_times(r, {0.01, 0.07, 0.0}, 1e-7);
 }
 
+// Livox ROS Driver 2 writes `timestamp` as a double counting nanoseconds (absolute): against the
+// unit rule, but no recording spans 1e6 s, so a span beyond is read as nanoseconds.
+TEST_F(IoTest, PlyDoubleNanosecondTimestampsSpanningYearsAreNanoseconds) {
+  const std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nproperty double timestamp\nend_header\n"
+      "1 2 3 1700000000000000000\n"
+      "4 5 6 1700000000050000000\n"
+      "7 8 9 1700000000100000000\n";
+  expect_times(read_point_cloud(write("livox_ros2.ply", text)), {0.0, 0.05, 0.1}, 1e-6);
+  // An hour of absolute seconds stays seconds.
+  const std::string hour =
+      "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+      "property float z\nproperty double timestamp\nend_header\n"
+      "1 2 3 1700000000.0\n"
+      "4 5 6 1700003600.0\n";
+  expect_times(read_point_cloud(write("hour.ply", hour)), {0.0, 3600.0});
+}
+
 // Three vertices with Ouster's uint32 t (nanoseconds), the second NaN, a face element after.
 std::string ouster_ply(bool big_endian) {
   Bytes b;

@@ -124,15 +124,20 @@ std::optional<std::size_t> time_field_rank(std::string_view field_name) {
   return static_cast<std::size_t>(found - kByPriority.begin());
 }
 
+// A floating field that counts nanoseconds against the rule (Livox ROS Driver 2's double
+// `timestamp`) spans about 1e8 "seconds" a sweep. No recording kept in one file lasts 11 days
+// (1e6 s), so times spanning more are read as nanoseconds.
 void PointSink::finish() {
   if (times_s_.empty()) return;
-  const double earliest = *std::min_element(times_s_.begin(), times_s_.end());
+  const auto [earliest, latest] = std::minmax_element(times_s_.begin(), times_s_.end());
+  constexpr double kLongestRecording_s = 1e6;
+  const double scale = *latest - *earliest > kLongestRecording_s ? 1e-9 : 1.0;
   // A span beyond float's range (only a hostile file) saturates, so every stored time is finite.
   constexpr double kLongest_s = std::numeric_limits<float>::max();
   std::vector<float>& out = result_.cloud.times_s;
   out.reserve(times_s_.size());
   for (const double t : times_s_) {
-    out.push_back(static_cast<float>(std::min(t - earliest, kLongest_s)));
+    out.push_back(static_cast<float>(std::min((t - *earliest) * scale, kLongest_s)));
   }
   times_s_ = {};
 }
