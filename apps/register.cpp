@@ -18,7 +18,6 @@
 #include "sgdicp/io/transform_io.hpp"
 #include "sgdicp/metrics/metrics.hpp"
 #include "sgdicp/registration/deskew.hpp"
-#include "sgdicp/surfaces/prepare_reference.hpp"
 #include "sgdicp/tools/render.hpp"
 
 namespace sgdicp::cli {
@@ -115,9 +114,7 @@ std::optional<DeskewedRegistration> deskew_source(const RegisterOptions& o,
                             ": --deskew needs each point's time (a PCD/PLY time field: t, "
                             "offset_time, time or timestamp, docs/io.md); this file has none");
   }
-  ReferenceIndex index = reference_index_for(reference_cloud, SgdSettings{});
-  prepare_reference(index, CostType::point_to_plane);
-  return align_deskewed(source, source.times_s, index, rigid.T_reference_source);
+  return align_deskewed(source, source.times_s, reference_cloud, rigid.T_reference_source);
 }
 
 // The files asked for: transform, trace, samples, aligned cloud (every source point in input

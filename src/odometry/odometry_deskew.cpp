@@ -18,7 +18,11 @@ PointCloud Odometry::prepared_frame(const PointCloud& frame) const {
   if (settings_.deskew == DeskewMode::azimuth) timed.times_s = azimuth_times_s(frame);
   PointCloud cropped = crop_range(timed, settings_.min_range_m, settings_.max_range_m);
   if (!registered_any_ || lost_since_good_ > 0 || poses_.size() < 2) return cropped;
-  return deskewed_by_motion(cropped, motion_.predicted());
+  // Deskewed, its times have served: without them the frame's two thinnings skip their mean-time
+  // pass (only the first two frames' are needed again, by deskew_first_frames).
+  PointCloud deskewed = deskewed_by_motion(cropped, motion_.predicted());
+  deskewed.times_s.clear();
+  return deskewed;
 }
 
 // The first two frames are registered as measured (no motion is known before the second); once

@@ -11,6 +11,8 @@
 #include <Eigen/Geometry>
 
 #include "sgdicp/core/error.hpp"
+#include "sgdicp/registration/registration.hpp"
+#include "sgdicp/surfaces/prepare_reference.hpp"
 
 namespace sgdicp {
 namespace {
@@ -229,6 +231,14 @@ DeskewedRegistration align_deskewed(const PointCloud& source, std::span<const fl
   r.message =
       "deskewing: not converged within " + std::to_string(settings.max_iterations) + " iterations";
   return r;
+}
+
+DeskewedRegistration align_deskewed(const PointCloud& source, std::span<const float> times_s,
+                                    const PointCloud& reference, const Eigen::Matrix4d& T_init,
+                                    const DeskewSettings& settings) {
+  ReferenceIndex index = reference_index_for(reference, SgdSettings{});
+  prepare_reference(index, CostType::point_to_plane);
+  return align_deskewed(source, times_s, index, T_init, settings);
 }
 
 PointCloud deskewed_in_reference(const PointCloud& source, std::span<const float> times_s,

@@ -39,8 +39,6 @@ namespace sgdicp {
 class ReferenceIndex;       // nearest_neighbor.hpp
 struct RegistrationResult;  // result.hpp
 
-/// The settings of the odometry pipeline (the registration step has its own: SgdSettings or
-/// BatchSettings). Lengths with a 0 default are derived from the first frame's extent (auto).
 /// Motion compensation of each frame (OdometrySettings::deskew).
 enum class DeskewMode {
   automatic,  ///< when the frame carries times (PointCloud::times_s)
@@ -59,6 +57,8 @@ constexpr std::string_view enum_noun(DeskewMode) {
   return "deskew mode";
 }
 
+/// The settings of the odometry pipeline (the registration step has its own: SgdSettings or
+/// BatchSettings). Lengths with a 0 default are derived from the first frame's extent (auto).
 struct OdometrySettings {
   /// Points farther from the sensor are dropped; the map keeps voxels within this radius of the
   /// current pose.

@@ -61,6 +61,14 @@ struct DeskewedRegistration {
                                                   const Eigen::Matrix4d& T_init,
                                                   const DeskewSettings& settings = {});
 
+/// align_deskewed against a reference cloud: its index built as a registration builds it
+/// (reference_index_for with the defaults), with the normals the pairs read. Throws as above.
+[[nodiscard]] DeskewedRegistration align_deskewed(const PointCloud& source,
+                                                  std::span<const float> times_s,
+                                                  const PointCloud& reference,
+                                                  const Eigen::Matrix4d& T_init,
+                                                  const DeskewSettings& settings = {});
+
 /// log of a rigid motion: the twist xi with exp_twist(xi) == T (rotation below pi).
 [[nodiscard]] Twist log_twist(const Eigen::Matrix4d& T);
 
