@@ -500,7 +500,7 @@ class BenchTasks {
 // What the small-source rules change of these settings (settings.hpp), for the summary line.
 std::string small_source_note(const SgdSettings& s) {
   std::vector<std::string> rules;
-  if (s.sampling.cap_batch_to_source) rules.emplace_back("m capped");
+  if (s.adapt_small_sources) rules.emplace_back("m capped");
   // optimizer_for a source of no points: the small-source rule's step, if it takes one.
   if (optimizer_for(s, 0).type != s.optimizer.type) rules.emplace_back("Gauss-Newton coarse steps");
   if (rules.empty()) return "";

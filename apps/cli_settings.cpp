@@ -182,10 +182,6 @@ void add_settings_options(CLI::App& app, SettingsOptions& o, bool with_voxel_gri
                  "of the largest side of the joint bounding box) or 'm' (metres) [default: "
                  "scaled]")
       ->check(CLI::IsMember({"scaled", "m"}));
-  app.add_option("--preconditioner", o.preconditioner,
-                 "SGD methods: 'none' (A = I, the paper) or 'gauss-newton' (the same as "
-                 "--optimizer gauss-newton) [default: none]")
-      ->check(CLI::IsMember({"none", "gauss-newton"}));
   for (const auto& s : sgd_settings_table()) {
     if (s.keyword_only) continue;
     const std::string name(s.name);
@@ -210,14 +206,6 @@ MethodSpec make_method(const std::string& name, const SettingsOptions& o) {
   // The method's cost first, so that an explicit --coarse-cost still sets the first stage's.
   apply_method_cost(method, m.sgd, m.batch);
   auto values = o.values;
-  if (o.preconditioner == "gauss-newton") {
-    const auto given = values.find("optimizer");
-    if (given != values.end() && given->second != "gauss-newton") {
-      throw InvalidSettingsError("--preconditioner gauss-newton contradicts --optimizer " +
-                                 given->second);
-    }
-    values["optimizer"] = "gauss-newton";
-  }
   const Distance::Unit unit = unit_of(o);
   // In table order: --optimizer sets the learning rate before --learning-rate can override it.
   for (const auto& s : sgd_settings_table()) {

@@ -28,7 +28,6 @@ struct SettingsOptions {
   std::string preset = "default";
   std::string method = "sgd";
   std::string max_distance_unit = "scaled";
-  std::optional<std::string> preconditioner;
   std::optional<std::string> random_ratio;
   /// Setting name (settings.hpp's table) -> the text given for it.
   OptionValues values;
@@ -37,7 +36,7 @@ struct SettingsOptions {
 /// --method (one, or with `several` a comma-separated list) and --random-ratio (the voxel grid
 /// is a setting of the table: --voxel-size, --downsample-to).
 void add_method_options(CLI::App& app, SettingsOptions& o, bool several);
-/// --preset, --max-distance-unit, --preconditioner and one option per setting of the table
+/// --preset, --max-distance-unit and one option per setting of the table
 /// (without --voxel-size and --downsample-to unless with_voxel_grid: odometry thins its frames
 /// and map itself).
 void add_settings_options(CLI::App& app, SettingsOptions& o, bool with_voxel_grid = true);

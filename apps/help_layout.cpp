@@ -16,22 +16,6 @@ std::string long_name(const CLI::Option& option) {
   return names.empty() ? std::string() : names.front();
 }
 
-// The heading of a registration setting in --help-all: the part of SgdSettings its field lives
-// in (the table's `field`, e.g. "optimizer.learning_rate"), so the grouping is the table's own.
-std::string part_of_field(std::string_view field) {
-  const std::string_view part = field.substr(0, field.find('.'));
-  if (part == "sampling") return "Sampling (the mini-batches)";
-  if (part == "optimizer") return "Step rule";
-  if (part == "convergence") return "Convergence";
-  if (part == "refinement") return "Refinement";
-  if (part == "pairing") return "Pairs and robust costs";
-  if (part == "neighborhood") return "Surfaces (normals, covariances)";
-  if (part == "downsampling") return "Downsampling";
-  if (part == "scaling") return "Scaling";
-  if (part == "uncertainty") return "Uncertainty";
-  return "Registration run";
-}
-
 // The group of an option in --help-all: a registration setting by its part of the table, an
 // odometry setting (in the odometry command), the --global-* and the depth-image options in
 // their own, any other one (files in and out) among the command's options.
@@ -42,7 +26,7 @@ std::string group_of(const CLI::Option& option, bool odometry) {
       if (s.name == name) return "Odometry";
     }
   }
-  if (const auto* s = find_sgd_setting(name)) return part_of_field(s->field);
+  if (const auto* s = find_sgd_setting(name)) return std::string(setting_part(s->field));
   if (name.rfind("global-", 0) == 0)
     return "Global registration (with --init global; docs/global.md)";
   if (name.find("depth") != std::string::npos || name == "intrinsics" || name == "pixel-stride") {

@@ -80,9 +80,8 @@ OdometrySettings odometry_settings(const OdometryOptions& o) {
   s.step_within_threshold = !o.settings.values.contains("learning-rate");
   // A step rule chosen on the command line is used from every start.
   s.deskew = parse_enum<DeskewMode>(o.deskew);
-  s.tracking_gauss_newton = !o.settings.values.contains("optimizer") &&
-                            !o.settings.preconditioner.has_value() &&
-                            !o.settings.values.contains("learning-rate");
+  s.tracking_gauss_newton =
+      !o.settings.values.contains("optimizer") && !o.settings.values.contains("learning-rate");
   return s;
 }
 
@@ -625,8 +624,8 @@ void add_odometry_command(CLI::App& app) {
       "of the frames before it, from a predicted pose. Writes the pose of every frame in the "
       "first frame's coordinates (docs/odometry.md). The registration options below apply to "
       "each frame; giving --max-distance fixes d_max (no adaptive threshold). The registrations "
-      "from the prediction and the last pose take Gauss-Newton steps unless --optimizer, "
-      "--preconditioner or --learning-rate is given; giving --learning-rate keeps it uncapped "
+      "from the prediction and the last pose take Gauss-Newton steps unless --optimizer or "
+      "--learning-rate is given; giving --learning-rate keeps it uncapped "
       "(Adam and RMSProp steps are otherwise capped at d_max / 4).");
   add_frame_options(*cmd, o);
   cmd->add_option("--map-out", o->map_out,

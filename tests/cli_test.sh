@@ -144,8 +144,8 @@ for opt in --max-iterations --seed --refine-stages --evaluation-points; do
 done
 expect_error "--learning-rate 1e-308" '--learning-rate 1e-308: must be in \[1e-06, 10000\]' \
   register "$MOVED" "$REF" --learning-rate 1e-308
-expect_error "--epsilon 1e308" '--epsilon 1e\+308: must be in \(0, 1\]' \
-  register "$MOVED" "$REF" --epsilon 1e308
+expect_error "--damping 1e308" '--damping 1e\+308: must be in \[0, 100\]' \
+  register "$MOVED" "$REF" --damping 1e308
 expect_error "--kernel-scale 1e-308 --kernel huber" '--kernel-scale 1e-308 scaled: must be in' \
   register "$MOVED" "$REF" --kernel-scale 1e-308 --kernel huber
 expect_error "--kernel-scale 1e-9 m" '--kernel-scale 1e-09 m: must be in \[1e-06, 1000000\] m' \
@@ -164,8 +164,8 @@ expect_error "--batch-size x --window too large" '--batch-size x --window' \
   register "$MOVED" "$REF" --batch-size 100000 --window 10000
 expect_error "--scaling-origin middle" '--scaling-origin: unknown scaling origin .middle.' \
   register "$MOVED" "$REF" --scaling-origin middle
-expect_error "--preconditioner contradicting --optimizer" 'contradicts --optimizer adam' \
-  register "$MOVED" "$REF" --preconditioner gauss-newton --optimizer adam
+expect_error "--preconditioner, gone: one spelling, --optimizer gauss-newton" 'preconditioner' \
+  register "$MOVED" "$REF" --preconditioner gauss-newton
 
 # Transform options name themselves in their errors.
 expect_error "--ground-truth with 5 numbers names --ground-truth" '^sgdicp: error: --ground-truth' \

@@ -307,7 +307,11 @@ TEST(BadInput, AbsurdSettingsThrow) {
       [](SgdSettings& s) { s.pairing.max_correspondence_distance = Distance::metres(0.0); });
   expect_invalid(
       [](SgdSettings& s) { s.pairing.max_correspondence_distance = Distance::scaled(INFINITY); });
-  expect_invalid([](SgdSettings& s) { s.optimizer.beta1 = 1.0; });
+  expect_invalid([](SgdSettings& s) { s.optimizer.damping = -1.0; });
+  // The fixed rules outside the table are range-checked too.
+  expect_invalid([](SgdSettings& s) { s.refinement.settle_tolerance = 1.0; });
+  expect_invalid([](SgdSettings& s) { s.convergence.max_path_efficiency = 0.0; });
+  expect_invalid([](SgdSettings& s) { s.uncertainty.block_size = Distance::scaled(0.0); });
   expect_invalid([](SgdSettings& s) { s.convergence.window = 3; });
   expect_invalid([](SgdSettings& s) { s.convergence.chi2 = 0.0; });
   expect_invalid([](SgdSettings& s) { s.refinement.step_decay = 0.0; });
@@ -498,7 +502,7 @@ TEST(SmallSource, CapsTheMiniBatch) {
   const PointCloud reference = synthetic_scene(51, 4000);
   const PointCloud source = transformed(synthetic_scene(52, 400), T_gt.inverse());
   SgdSettings uncapped;
-  uncapped.sampling.cap_batch_to_source = false;
+  uncapped.adapt_small_sources = false;
   const RegistrationResult capped = align(source, reference, s);
   const RegistrationResult full = align(source, reference, uncapped);
   EXPECT_EQ(capped.points_processed, capped.iterations * 40);
@@ -524,12 +528,9 @@ TEST(SmallSource, TakesGaussNewtonStepsWithTheDefaultOptimizer) {
   chosen.optimizer.learning_rate = 0.02;
   EXPECT_EQ(optimizer_for(chosen, 361), chosen.optimizer);
   SgdSettings off;
-  off.small_source_gauss_newton = false;
+  off.adapt_small_sources = false;
   EXPECT_EQ(optimizer_for(off, 361), off.optimizer);
-  // Adam's own constants chosen: Adam; the Gauss-Newton steps' damping chosen: those steps.
-  SgdSettings adam_tuned;
-  adam_tuned.optimizer.beta1 = 0.8;
-  EXPECT_EQ(optimizer_for(adam_tuned, 361), adam_tuned.optimizer);
+  // The Gauss-Newton steps' damping chosen: those steps.
   SgdSettings damped;
   damped.optimizer.damping = 0.01;
   EXPECT_EQ(optimizer_for(damped, 361).type, OptimizerType::gauss_newton);
@@ -549,7 +550,7 @@ TEST(SmallSource, GaussNewtonSolvesTheBunnyFasterThanAdam) {
   SgdSettings newton;
   newton.refinement.settle_tolerance = 0.0;
   SgdSettings adam = newton;
-  adam.small_source_gauss_newton = false;
+  adam.adapt_small_sources = false;
   const std::vector<Eigen::Vector3d> axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
                                              Eigen::Vector3d(1, 1, 1).normalized()};
   for (const Eigen::Vector3d& axis : axes) {
@@ -586,7 +587,7 @@ TEST(SmallSource, AWholeSourceBatchConvergesDespiteAPairingCycle) {
   s.coarse_cost = CostType::point_to_plane;
   s.optimizer = {OptimizerType::gauss_newton, default_learning_rate(OptimizerType::gauss_newton)};
   s.sampling.batch_size = source.size();
-  s.sampling.cap_batch_to_source = false;
+  s.adapt_small_sources = false;
   const RegistrationResult r = align(source, reference, s);
   EXPECT_TRUE(r.converged) << r.message;
   EXPECT_LT(r.iterations, 1000U);

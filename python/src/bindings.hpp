@@ -122,6 +122,12 @@ void bind_settings_keywords(py::module_& m);
 /// options), then validated. Throws TypeError for an unknown keyword or a value of the wrong
 /// type, and InvalidSettingsError (ValueError) for an invalid value.
 [[nodiscard]] SgdSettings with_overrides(SgdSettings base, const py::dict& overrides);
+/// A copy of the `settings` argument (a Settings) for an SGD `method`, or the defaults for None;
+/// TypeError for anything else.
+[[nodiscard]] SgdSettings settings_or_default(const py::handle& settings, const Method& method);
+/// The same, a BatchSettings, for a batch `method`.
+[[nodiscard]] BatchSettings batch_settings_or_default(const py::handle& settings,
+                                                      const Method& method);
 
 /// `base` with the batch keyword overrides of docs/python.md applied (the CLI's options that apply
 /// to the batch methods, plus `cost`), then validated. `method` names the batch method in error

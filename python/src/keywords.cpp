@@ -131,10 +131,9 @@ SettingValue value_from_object(const Setting<S>& s, const py::handle& value, Dis
 }
 
 // Names a reader of the Settings attributes may try, and the keyword that means it.
-constexpr std::array<std::pair<std::string_view, std::string_view>, 14> kSuggestions{{
+constexpr std::array<std::pair<std::string_view, std::string_view>, 13> kSuggestions{{
     {"voxel_size_m", "voxel_size"},
     {"max_correspondence_distance", "max_distance"},
-    {"max_path_efficiency", "path_efficiency"},
     {"average_iterates", "average"},
     {"stages", "refine_stages"},
     {"refinement_stages", "refine_stages"},
@@ -148,6 +147,27 @@ constexpr std::array<std::pair<std::string_view, std::string_view>, 14> kSuggest
     {"method", "cost"},
 }};
 
+// Keywords of earlier releases that are no setting now: fixed rules of the default, or set by
+// Settings.paper() alone (docs/registration.md, *Why each setting is there*).
+constexpr std::array<std::string_view, 18> kRetired{"momentum",
+                                                    "beta1",
+                                                    "beta2",
+                                                    "rms_decay",
+                                                    "epsilon",
+                                                    "hessian_decay",
+                                                    "path_efficiency",
+                                                    "refine_gauss_newton",
+                                                    "settle_tolerance",
+                                                    "flat_neighbors",
+                                                    "flatness",
+                                                    "robust_scaling",
+                                                    "cap_batch_to_source",
+                                                    "small_source_gauss_newton",
+                                                    "burn_in",
+                                                    "sgld_step",
+                                                    "svgd_step",
+                                                    "block_size"};
+
 template <typename S>
 std::string keyword_list(const std::vector<Setting<S>>& table) {
   std::string list = "max_distance_unit";
@@ -159,6 +179,11 @@ std::string keyword_list(const std::vector<Setting<S>>& table) {
   std::string message = "unknown setting '" + name + "'";
   for (const auto& [alias, keyword] : kSuggestions) {
     if (name == alias) message += " (did you mean '" + std::string(keyword) + "'?)";
+  }
+  if (std::find(kRetired.begin(), kRetired.end(), name) != kRetired.end()) {
+    message +=
+        " (no longer a setting: a fixed rule of the default, or Settings.paper()'s; "
+        "docs/registration.md)";
   }
   if (name.starts_with("global")) {
     message.append("; the keywords of register(init='global') are: ");

@@ -31,6 +31,21 @@ OdometrySettings take_odometry_keywords(py::dict& overrides) {
   return s;
 }
 
+// What a Settings given to the odometry chose itself counts as chosen, as its keyword would: a
+// step rule of its own keeps the tracking's Gauss-Newton steps off and its step uncapped, a d_max
+// of its own turns the adaptive threshold off.
+void chosen_in_settings(const SgdSettings& sgd, OdometrySettings& odometry) {
+  const SgdSettings defaults;
+  if (sgd.optimizer.type != defaults.optimizer.type) odometry.tracking_gauss_newton = false;
+  if (sgd.optimizer.learning_rate != defaults.optimizer.learning_rate) {
+    odometry.tracking_gauss_newton = false;
+    odometry.step_within_threshold = false;
+  }
+  if (sgd.pairing.max_correspondence_distance != defaults.pairing.max_correspondence_distance) {
+    odometry.adaptive_threshold = false;
+  }
+}
+
 // What Odometry's and Localizer's constructors take, from the method and the keywords.
 struct OdometryArguments {
   OdometrySettings settings;
@@ -39,9 +54,12 @@ struct OdometryArguments {
   BatchSettings batch;
 };
 
-OdometryArguments odometry_arguments(const std::string& method, const py::kwargs& kwargs) {
+// `settings` (a Settings, a BatchSettings or None) is the registration's base, as register()'s;
+// a step rule or d_max it sets is the user's, as the keywords' are (take_odometry_keywords).
+OdometryArguments odometry_arguments(const std::string& method, const py::object& settings,
+                                     const py::kwargs& kwargs) {
   py::dict overrides(kwargs);
-  const OdometrySettings settings = take_odometry_keywords(overrides);
+  OdometrySettings odometry = take_odometry_keywords(overrides);
   // voxel_size= was taken as the map's; the registration's own grid has no place here.
   if (overrides.contains("downsample_to")) {
     throw InvalidSettingsError(
@@ -57,9 +75,12 @@ OdometryArguments odometry_arguments(const std::string& method, const py::kwargs
   BatchSettings batch;
   try {
     if (m.solver == Solver::sgd) {
+      sgd = settings_or_default(settings, m);
+      chosen_in_settings(sgd, odometry);
       apply_method_cost(m, sgd, batch);
       sgd = with_overrides(sgd, overrides);
     } else {
+      batch = batch_settings_or_default(settings, m);
       batch.cost = *m.cost;
       batch = with_batch_overrides(batch, overrides, m.name);
     }
@@ -70,20 +91,21 @@ OdometryArguments odometry_arguments(const std::string& method, const py::kwargs
     }
     throw py::type_error(std::string(e.what()) + "; the odometry keywords: " + names);
   }
-  return {settings, std::string(m.name), sgd, batch};
+  return {odometry, std::string(m.name), sgd, batch};
 }
 
-Odometry make_odometry(const std::string& method, const py::kwargs& kwargs) {
-  const OdometryArguments a = odometry_arguments(method, kwargs);
+Odometry make_odometry(const std::string& method, const py::object& settings,
+                       const py::kwargs& kwargs) {
+  const OdometryArguments a = odometry_arguments(method, settings, kwargs);
   return Odometry(a.settings, a.method, a.sgd, a.batch);
 }
 
 Localizer make_localizer(const py::handle& map, const py::object& init, const std::string& method,
-                         const py::kwargs& kwargs) {
+                         const py::object& settings, const py::kwargs& kwargs) {
   ConvertedCloud cloud = cloud_from_array(map, "map", NonFinite::drop, /*allow_empty=*/true);
   std::optional<Eigen::Matrix4d> T_map_first_frame;
   if (!init.is_none()) T_map_first_frame = matrix_from_array(init, "init");
-  const OdometryArguments a = odometry_arguments(method, kwargs);
+  const OdometryArguments a = odometry_arguments(method, settings, kwargs);
   return Localizer(std::move(cloud.cloud), T_map_first_frame, a.settings, a.method, a.sgd, a.batch);
 }
 
@@ -190,14 +212,20 @@ void bind_odometry(py::module_& m) {
                        "at a time to a local voxel map, from the last motion's share that carried "
                        "over between frames, with an adaptive correspondence threshold "
                        "(docs/odometry.md).")
-      .def(py::init([](const std::string& method, const py::kwargs& kwargs) {
-             return make_odometry(method, kwargs);
-           }),
-           "method"_a = "sgd",
+      .def(py::init(
+               [](const std::string& method, const py::object& settings, const py::kwargs& kwargs) {
+                 return make_odometry(method, settings, kwargs);
+               }),
+           "method"_a = "sgd", py::kw_only(), "settings"_a = py::none(),
            ("method: the registration step, a --method of the CLI (" + method_list() +
-            "). Keywords: the odometry settings of `sgdicp odometry` (" + keywords +
-            "; 0 = derived from the data, docs/odometry.md) and the keywords of "
-            "register() for the method. max_distance= fixes d_max and turns the adaptive "
+            "). settings: the registration's base settings, as register()'s (a Settings, or a "
+            "BatchSettings for a batch method; None = the defaults). Keywords: the odometry "
+            "settings of `sgdicp odometry` (" +
+            keywords +
+            "; 0 = derived from the data, docs/odometry.md), deskew= ('auto', 'none', "
+            "'azimuth') and the keywords of register() for the method; most runs set at most "
+            "voxel_size=, max_range=, threads= and uncertainty=. max_distance= fixes d_max and "
+            "turns the adaptive "
             "threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for an "
             "invalid value.")
                .c_str())
@@ -288,10 +316,12 @@ void bind_odometry(py::module_& m) {
       "first frame placed by the global registration (or from init), every later one from the "
       "motion model's prediction; a frame the map does not hold is lost, not placed. Poses are "
       "in the map's coordinates (docs/odometry.md, Localization).")
-      .def(py::init(
-               [](const py::handle& map, const py::object& init, const std::string& method,
-                  const py::kwargs& kwargs) { return make_localizer(map, init, method, kwargs); }),
-           "map"_a, "init"_a = py::none(), "method"_a = "sgd",
+      .def(py::init([](const py::handle& map, const py::object& init, const std::string& method,
+                       const py::object& settings, const py::kwargs& kwargs) {
+             return make_localizer(map, init, method, settings, kwargs);
+           }),
+           "map"_a, "init"_a = py::none(), "method"_a = "sgd", py::kw_only(),
+           "settings"_a = py::none(),
            "map: (N, 3) float32/float64 array of the map's points, metres. init: the first "
            "frame's (4, 4) pose in the map, or None (the global registration places it). method "
            "and the keywords: as Odometry's. Raises InvalidInputError for a map without a finite "

@@ -27,8 +27,6 @@ const Method& method_from_object(const py::handle& value) {
   return method_from_string(value.cast<std::string>());
 }
 
-namespace {
-
 /// A copy of `settings` (a Settings), or the defaults for None.
 SgdSettings settings_or_default(const py::handle& settings, const Method& method) {
   if (settings.is_none()) return SgdSettings{};
@@ -52,6 +50,8 @@ BatchSettings batch_settings_or_default(const py::handle& settings, const Method
   }
   return settings.cast<BatchSettings>();
 }
+
+namespace {
 
 template <typename Settings>
 ReferenceNeeds needs_of(const Settings& s, bool cost_in_index) {
@@ -196,8 +196,10 @@ method : str, default 'sgd'
     plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
     error). An unknown name raises InvalidSettingsError.
 **overrides
-    Flat keyword settings applied on top of `settings`, named like the CLI's options (the
-    library's settings table), each with its default and valid range. A distance given as a number
+    Keyword settings applied on top of `settings`, named like the CLI's options (the library's
+    settings table), each with its default and valid range. Most runs set one of the common
+    ones at most; the others are better kept together in `settings`
+    (settings=sgd_icp.Settings(refine_stages=2, trim=0.8)), which any number of calls share. A distance given as a number
     is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
     optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
     For the batch methods (any other keyword raises TypeError):
@@ -207,7 +209,7 @@ method : str, default 'sgd'
     With init='global' (an error without it), the global estimate's settings, named like the
     CLI's --global-* options (docs/global.md):
 @GLOBAL@.
-    See docs/python.md for the settings each one sets.
+    See docs/python-settings.md for the settings each one sets.
 
 The GIL is released during the registration (and the KD-tree build), so registrations in
 several Python threads run in parallel.

@@ -285,12 +285,6 @@ void bind_optimizer(py::module_& m) {
           },
           "")
       .def_readwrite("learning_rate", &OptimizerSettings::learning_rate, "")
-      .def_readwrite("momentum", &OptimizerSettings::momentum, "")
-      .def_readwrite("beta1", &OptimizerSettings::beta1, "")
-      .def_readwrite("beta2", &OptimizerSettings::beta2, "")
-      .def_readwrite("rms_decay", &OptimizerSettings::rms_decay, "")
-      .def_readwrite("epsilon", &OptimizerSettings::epsilon, "")
-      .def_readwrite("hessian_decay", &OptimizerSettings::hessian_decay, "")
       .def_readwrite("damping", &OptimizerSettings::damping, "")
       .def("validate", &OptimizerSettings::validate,
            "Raises InvalidSettingsError (a ValueError) naming the first invalid value.");
@@ -331,13 +325,19 @@ void bind_neighborhood(py::module_& m) {
       "(Settings.neighborhood).");
   neighborhood.def(py::init<>());
   def_count(neighborhood, "k", &NeighborhoodSettings::k, "");
-  def_count(neighborhood, "flat_k", &NeighborhoodSettings::flat_k, "");
+  def_count(neighborhood, "flat_k", &NeighborhoodSettings::flat_k,
+            "Neighbours of a point whose nearest ones already lie flat (surface variation at "
+            "most flatness): those alone give its normal and covariance; 0 = always k. Settings: "
+            "10, BatchSettings: 0 (docs/preprocessing.md).");
   def_count(neighborhood, "num_threads", &NeighborhoodSettings::num_threads,
             "Worker threads of the estimation; 0 = all cores (the results are the same for any "
             "count). Default 0.");
   def_flag(neighborhood, "regularize", &NeighborhoodSettings::regularize,
            "Replace each covariance by the GICP plane model (unitless). Default True.");
-  neighborhood.def_readwrite("flatness", &NeighborhoodSettings::flatness, "")
+  neighborhood
+      .def_readwrite("flatness", &NeighborhoodSettings::flatness,
+                     "The largest surface variation of a flat neighbourhood, in [0, 1/3]. "
+                     "Default 0.05.")
       .def_readwrite("epsilon", &NeighborhoodSettings::epsilon,
                      "Variance along the normal in the plane model, relative to 1 in the plane, "
                      "in (0, 1]. Default 1e-3.")
@@ -395,9 +395,9 @@ void bind_sgd_settings(py::module_& m) {
   // The groups sampling, pairing, scaling, evaluation and downsampling are flat attributes here,
   // as they are flat keywords.
   def_count(settings, "batch_size", &SgdSettings::sampling, &SamplingSettings::batch_size, "");
-  def_flag(settings, "cap_batch_to_source", &SgdSettings::sampling,
-           &SamplingSettings::cap_batch_to_source, "");
-  def_flag(settings, "small_source_gauss_newton", &SgdSettings::small_source_gauss_newton, "");
+  def_flag(settings, "adapt_small_sources", &SgdSettings::adapt_small_sources,
+           "The small-source rules (Settings.paper(): False): a capped mini-batch and "
+           "Gauss-Newton coarse steps for sources of fewer than batch_size x window / 2 points.");
   def_distance(settings, "max_correspondence_distance", &SgdSettings::pairing,
                &PairingSettings::max_correspondence_distance, "");
   settings
@@ -429,7 +429,9 @@ void bind_sgd_settings(py::module_& m) {
   def_count(settings, "evaluation_points", &SgdSettings::evaluation,
             &EvaluationSettings::evaluation_points, "");
   def_flag(settings, "record_trace", &SgdSettings::record_trace, "");
-  def_flag(settings, "robust_scaling", &SgdSettings::scaling, &ScalingSettings::robust, "");
+  def_flag(settings, "robust_scaling", &SgdSettings::scaling, &ScalingSettings::robust,
+           "Scale from the bulk of each cloud, not hostage to a few far points "
+           "(Settings.paper(): False, the bounding box of every point). Default True.");
   def_count(settings, "num_threads", &SgdSettings::num_threads, "");
   def_voxel_grid(settings);
   def_value_methods(settings);
@@ -496,7 +498,8 @@ void bind_batch_settings(py::module_& m) {
                      "NeighborhoodSettings for the normals and covariances of the plane costs.");
   def_count(batch, "evaluation_points", &BatchSettings::evaluation,
             &EvaluationSettings::evaluation_points, "");
-  def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling, "");
+  def_flag(batch, "robust_scaling", &BatchSettings::robust_scaling,
+           "Scale from the bulk of each cloud, not hostage to a few far points. Default True.");
   def_count(batch, "num_threads", &BatchSettings::num_threads, "");
   def_voxel_grid(batch);
   def_flag(batch, "record_trace", &BatchSettings::record_trace, "");

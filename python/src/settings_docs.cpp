@@ -1,8 +1,10 @@
 // The library's settings table (settings.hpp) as Python text: each settings attribute's
 // docstring (help, unit, range, keyword, default) and the keyword lists of register()'s docstring,
 // so that the text has one source; and as data, for the keyword parameters of the type stub.
+#include <algorithm>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "bindings.hpp"
@@ -120,17 +122,18 @@ void document_attributes(py::module_& m, const std::vector<Setting<S>>& table, c
 // "keyword (default, range), ..." wrapped at 96 columns; default_of(s) is a setting's default
 // as Python writes it.
 template <typename S, typename DefaultOf>
-std::string summary_of(const std::vector<Setting<S>>& table, const DefaultOf& default_of,
+std::string summary_of(const std::vector<const Setting<S>*>& rows, const DefaultOf& default_of,
                        std::string_view indent) {
   std::string out;
   std::string line(indent);
-  for (const auto& s : table) {
+  for (const Setting<S>* row : rows) {
+    const Setting<S>& s = *row;
     std::string item = keyword_of(s.name) + " (" + default_of(s);
     if (s.kind == SettingKind::count || s.kind == SettingKind::real) {
       item += ", " + s.range.to_string();
     }
     item += ")";
-    if (&s != &table.back()) item += ",";
+    if (row != rows.back()) item += ",";
     if (line.size() + item.size() + 1 > 96 && line.size() > indent.size()) {
       out += line + "\n";
       line = std::string(indent);
@@ -138,6 +141,43 @@ std::string summary_of(const std::vector<Setting<S>>& table, const DefaultOf& de
     line += (line.size() > indent.size() ? " " : "") + item;
   }
   return out + line;
+}
+
+template <typename S, typename DefaultOf>
+std::string summary_of(const std::vector<Setting<S>>& table, const DefaultOf& default_of,
+                       std::string_view indent) {
+  std::vector<const Setting<S>*> rows;
+  for (const auto& s : table) rows.push_back(&s);
+  return summary_of(rows, default_of, indent);
+}
+
+// The common settings of `table` (SettingDescription::common), then the others under the heading
+// of the part that reads them (setting_part), in table order within a part.
+template <typename S, typename DefaultOf>
+std::string grouped_summary(const std::vector<Setting<S>>& table, const DefaultOf& default_of,
+                            std::string_view indent) {
+  std::vector<const Setting<S>*> common;
+  std::vector<std::pair<std::string_view, std::vector<const Setting<S>*>>> parts;
+  for (const auto& s : table) {
+    if (s.common) {
+      common.push_back(&s);
+      continue;
+    }
+    const std::string_view part = setting_part(s.field);
+    auto it =
+        std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return p.first == part; });
+    if (it == parts.end()) it = parts.insert(parts.end(), {part, {}});
+    it->second.push_back(&s);
+  }
+  std::string out = std::string(indent) + "The common ones:\n" +
+                    summary_of(common, default_of, std::string(indent) + "  ") + ".\n" +
+                    std::string(indent) + "The others, by the part of the run that reads them:";
+  for (const auto& [part, rows] : parts) {
+    out += "\n" + std::string(indent) + std::string(part) + ":\n" +
+           summary_of(rows, default_of, std::string(indent) + "  ") + ";";
+  }
+  out.pop_back();
+  return out;
 }
 
 // The kind as Python code names it.
@@ -168,9 +208,9 @@ py::list keyword_rows(const std::vector<Setting<S>>& table, const py::object& de
   for (const auto& s : table) {
     py::object choice = py::none();
     if (s.kind == SettingKind::choice) choice = py::str(class_name(value_of(s, defaults)));
-    rows.append(py::make_tuple(keyword_of(s.name), kind_name(s.kind), choice));
+    rows.append(py::make_tuple(keyword_of(s.name), kind_name(s.kind), choice, s.common));
     if (s.kind == SettingKind::distance && !unit_listed) {
-      rows.append(py::make_tuple("max_distance_unit", "choice", "DistanceUnit"));
+      rows.append(py::make_tuple("max_distance_unit", "choice", "DistanceUnit", false));
       unit_listed = true;
     }
   }
@@ -189,7 +229,7 @@ std::string keyword_summary(const py::module_& core, Solver solver, std::string_
     };
   };
   if (solver == Solver::sgd) {
-    return summary_of(sgd_settings_table(), from_doc(core.attr("Settings")()), indent);
+    return grouped_summary(sgd_settings_table(), from_doc(core.attr("Settings")()), indent);
   }
   return summary_of(batch_settings_table(), from_doc(core.attr("BatchSettings")()), indent);
 }
@@ -208,6 +248,7 @@ std::string global_keyword_summary(std::string_view indent) {
 
 void document_settings(py::module_& m) {
   document_attributes(m, sgd_settings_table(), "Settings");
+  document_attributes(m, sgd_fixed_rules_table(), "Settings");
   document_attributes(m, batch_settings_table(), "BatchSettings");
 }
 
@@ -227,8 +268,9 @@ void bind_settings_keywords(py::module_& m) {
       py::arg("solver"),
       "The keywords of Settings(**overrides) (solver 'sgd'), BatchSettings(**overrides) "
       "('batch'), Odometry's own ('odometry') or register(init='global')'s ('global') as "
-      "(keyword, kind, enum class name or None) in the table's order; kind is 'count', 'real', "
-      "'flag', 'distance' or 'choice'. Read by python/tools/stub_signatures.py.");
+      "(keyword, kind, enum class name or None, common) in the table's order; kind is 'count', "
+      "'real', 'flag', 'distance' or 'choice'; common: one of the few a user sets, listed first. "
+      "Read by python/tools/stub_signatures.py.");
 }
 
 }  // namespace sgdicp::python

@@ -70,10 +70,14 @@ def enum_aliases(tree: ast.Module) -> dict[str, str]:
 
 def keyword_types(module: ModuleType, solvers: tuple[str, ...],
                   aliases: dict[str, str]) -> dict[str, str]:
-    """Each keyword of the solvers' tables with its stub type, in table order."""
+    """Each keyword of the solvers' tables with its stub type: the common ones first (those a user
+    sets, as help() lists them), then the others, each in table order."""
     types: dict[str, str] = {}
+    common: list[str] = []
     for solver in solvers:
-        for keyword, kind, enum_name in module._settings_keywords(solver):
+        for keyword, kind, enum_name, is_common in module._settings_keywords(solver):
+            if is_common and keyword not in common:
+                common.append(keyword)
             if kind == "choice":
                 annotation = aliases.get(enum_name, f"{enum_name} | str")
             else:
@@ -81,7 +85,7 @@ def keyword_types(module: ModuleType, solvers: tuple[str, ...],
             if types.get(keyword, annotation) != annotation:  # typed apart by the two tables
                 annotation = f"{types[keyword]} | {annotation}"
             types[keyword] = annotation
-    return types
+    return {**{k: types[k] for k in common}, **types}
 
 
 def own_parameters(module: ModuleType, qualified: str) -> set[str]:

@@ -9,6 +9,7 @@
 namespace sgdicp {
 namespace {
 
+using detail::common;
 using detail::setting;
 using S = OdometrySettings;
 
@@ -18,16 +19,16 @@ constexpr ValueRange kPositiveLength{0.0, 1e6, true};
 
 std::vector<Setting<S>> make_table() {
   return {
-      setting<S, &S::max_range_m>(
+      common(setting<S, &S::max_range_m>(
           {"max-range", "max_range_m", kPositiveLength, "m",
-           "Points farther from the sensor are dropped; the map keeps voxels within this radius"}),
+           "Points farther from the sensor are dropped; the map keeps voxels within this radius"})),
       setting<S, &S::min_range_m>(
           {"min-range", "min_range_m", kLength, "m", "Points closer to the sensor are dropped"}),
-      setting<S, &S::voxel_size_m>(
+      common(setting<S, &S::voxel_size_m>(
           {"voxel-size", "voxel_size_m", kLength, "m",
            "Map voxel side (frames thinned to 0.75 of it for the map, 1.5 times it for the "
            "registration); 0 = 1 % of the first frame's 99th-percentile range, grown when the "
-           "second frame or half the last 5 see twice as far"}),
+           "second frame or half the last 5 see twice as far"})),
       setting<S, &S::max_points_per_voxel>(
           {"max-points-per-voxel",
            "max_points_per_voxel",

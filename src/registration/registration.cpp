@@ -458,7 +458,7 @@ std::optional<RegistrationResult> detail::align_unless(const PointCloud& source,
   const detail::PreparedSource src(
       source, voxel_m, settings.num_threads, frame.origin_m(), source_needs, settings.neighborhood,
       min_source_points(settings),
-      settings.sampling.cap_batch_to_source ? "the smallest mini-batch" : "the mini-batch size",
+      settings.adapt_small_sources ? "the smallest mini-batch" : "the mini-batch size",
       detail::SurfaceEstimation::lazy);
   // The run's own copy: m capped and Gauss-Newton steps for a small source.
   SgdSettings run_settings = settings;

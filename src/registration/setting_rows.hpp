@@ -74,6 +74,13 @@ struct Describe {
   bool keyword_only = false;
 };
 
+// `row` marked common (SettingDescription::common).
+template <typename S>
+Setting<S> common(Setting<S> row) {
+  row.common = true;
+  return row;
+}
+
 // The row of the member S.*Members... (nested members in order).
 template <typename S, auto... Members>
 Setting<S> setting(const Describe& d) {

@@ -17,15 +17,14 @@ namespace sgdicp {
 SgdSettings SgdSettings::paper(OptimizerType optimizer) {
   SgdSettings s;
   s.sampling.batch_size = 160;
-  s.sampling.cap_batch_to_source = false;
-  s.small_source_gauss_newton = false;
+  s.adapt_small_sources = false;
   s.pairing.max_correspondence_distance = Distance::scaled(0.5);
   s.optimizer.type = optimizer;
   // The paper states alpha = 2 for the fixed step. Adam's step is a length per iteration (it
   // divides by the gradient's RMS), so alpha = 2 would jump twice across the unit cube; we use
   // the original implementation's Adam step 0.1 scaled down by the measured factor
   // (docs/design.md). Both come from the one table of step sizes.
-  s.optimizer.learning_rate = default_learning_rate(optimizer, s.optimizer.momentum);
+  s.optimizer.learning_rate = default_learning_rate(optimizer);
   s.scaling.origin = ScalingOrigin::lower_corner;
   s.scaling.robust = false;
   s.refinement.stages = 0;
@@ -46,7 +45,7 @@ bool is_small_source(const SgdSettings& settings, std::size_t source_points) {
 }
 
 std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_points) {
-  if (!settings.sampling.cap_batch_to_source || !is_small_source(settings, source_points)) {
+  if (!settings.adapt_small_sources || !is_small_source(settings, source_points)) {
     return settings.sampling.batch_size;
   }
   const std::size_t window = window_of(settings);
@@ -57,13 +56,12 @@ std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_point
 bool is_default_step_rule(const OptimizerSettings& optimizer) {
   OptimizerSettings rule = optimizer;
   const OptimizerSettings defaults = SgdSettings{}.optimizer;
-  rule.hessian_decay = defaults.hessian_decay;
   rule.damping = defaults.damping;
   return rule == defaults;
 }
 
 OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_points) {
-  if (!settings.small_source_gauss_newton || !is_default_step_rule(settings.optimizer) ||
+  if (!settings.adapt_small_sources || !is_default_step_rule(settings.optimizer) ||
       !is_small_source(settings, source_points)) {
     return settings.optimizer;
   }
@@ -71,9 +69,8 @@ OptimizerSettings optimizer_for(const SgdSettings& settings, std::size_t source_
 }
 
 std::size_t min_source_points(const SgdSettings& settings) {
-  return settings.sampling.cap_batch_to_source
-             ? std::min(settings.sampling.batch_size, kMinCappedBatch)
-             : settings.sampling.batch_size;
+  return settings.adapt_small_sources ? std::min(settings.sampling.batch_size, kMinCappedBatch)
+                                      : settings.sampling.batch_size;
 }
 
 BatchSettings BatchSettings::icp() {
@@ -117,6 +114,21 @@ std::string format_value(const SettingValue& value) {
     std::string operator()(const std::string& name) const { return name; }
   };
   return std::visit(Visitor{}, value);
+}
+
+// The part of SgdSettings the field lives in (the table's own grouping).
+std::string_view setting_part(std::string_view field) {
+  const std::string_view part = field.substr(0, field.find('.'));
+  if (part == "sampling") return "Sampling (the mini-batches)";
+  if (part == "optimizer") return "Step rule";
+  if (part == "convergence") return "Convergence";
+  if (part == "refinement") return "Refinement";
+  if (part == "pairing") return "Pairs and robust costs";
+  if (part == "neighborhood") return "Surfaces (normals, covariances)";
+  if (part == "downsampling") return "Downsampling";
+  if (part == "scaling") return "Scaling";
+  if (part == "uncertainty") return "Uncertainty";
+  return "Registration run";
 }
 
 std::string SettingDescription::spelled(SettingNames names) const {
@@ -168,6 +180,7 @@ constexpr double kMaxWindowPairs = 1e8;
 
 void SgdSettings::validate(SettingNames names) const {
   detail::check_table(*this, sgd_settings_table(), names);
+  detail::check_table(*this, sgd_fixed_rules_table(), SettingNames::field);
   neighborhood.validate();  // epsilon and the viewpoint are not in the table
   const double pairs =
       static_cast<double>(sampling.batch_size) * static_cast<double>(convergence.window);

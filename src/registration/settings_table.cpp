@@ -14,6 +14,7 @@ namespace sgdicp {
 
 namespace {
 
+using detail::common;
 using detail::Describe;
 using detail::setting;
 using S = SgdSettings;
@@ -36,7 +37,6 @@ constexpr double kUint64Max = 0x1p64;
 // A distance in scaled units: a millionth of the scene (below that, float32 coordinates cannot
 // resolve it) to ten scenes (the pose is declared diverged there).
 constexpr ValueRange kScaledRange{1e-6, 10.0};
-constexpr ValueRange kDecay{0.0, 1.0, false, true};  // [0, 1)
 // The fixed step is a gradient multiplier: large ones are legitimate on small gradients, and a
 // step that blows the pose up is reported as diverged.
 constexpr ValueRange kLearningRate{1e-6, 1e4};
@@ -45,8 +45,6 @@ constexpr ValueRange kTolerance{0.0, 0.01};
 constexpr ValueRange kTrim{0.01, 1.0};
 constexpr ValueRange kIterations{1.0, 1e9};
 constexpr ValueRange kNeighbors{3.0, 1000.0};
-constexpr ValueRange kFlatNeighbors{0.0, 1000.0};
-constexpr ValueRange kFlatness{0.0, 1.0 / 3.0};
 constexpr ValueRange kEvaluationPoints{0.0, 4294967295.0};
 constexpr ValueRange kThreads{0.0, static_cast<double>(kMaxThreads)};
 // A voxel side: 0 (no fixed grid) up to 1000 km; sizes too small for the coordinates are
@@ -76,18 +74,8 @@ constexpr std::string_view kThreadsHelp =
     "0 = every core; the result is the same for any count";
 constexpr std::string_view kNeighborsHelp =
     "Plane costs: neighbours per point (itself included) for normals and covariances";
-constexpr std::string_view kFlatNeighborsHelp =
-    "Plane costs: neighbours of a point whose nearest ones already lie flat (surface variation "
-    "at most --flatness): those alone give its normal and covariance, the others' come from "
-    "--neighbors; 0 = always --neighbors";
-constexpr std::string_view kFlatnessHelp =
-    "Plane costs: the largest surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2) of a "
-    "flat neighbourhood (see --flat-neighbors)";
 constexpr std::string_view kEvaluationHelp =
     "Source points (spread evenly) used for the final inlier ratio and RMSE, 0 = all";
-constexpr std::string_view kRobustScalingHelp =
-    "Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's "
-    "bounding box of every point)";
 constexpr std::string_view kTraceHelp = "Record a per-iteration trace in the result";
 constexpr std::string_view kCostHelp =
     "Cost of a pair: point-to-point (the paper), point-to-plane or plane-to-plane (GICP)";
@@ -103,7 +91,7 @@ Setting<S> optimizer_setting() {
        "one is given"});
   s.set = [](S& x, const SettingValue& v) {
     x.optimizer.type = parse_enum<OptimizerType>(std::get<std::string>(v));
-    x.optimizer.learning_rate = default_learning_rate(x.optimizer.type, x.optimizer.momentum);
+    x.optimizer.learning_rate = default_learning_rate(x.optimizer.type);
   };
   return s;
 }
@@ -138,50 +126,18 @@ std::vector<Setting<S>> step_settings() {
                                                  {1.0, 1e7},
                                                  "",
                                                  "Mini-batch size m, source points per iteration"}),
-      setting<S, &S::sampling, &SA::cap_batch_to_source>(
-          {"cap-batch-to-source",
-           "sampling.cap_batch_to_source",
-           {},
-           "",
-           "Small sources: cap m at 2 x source points / window (at least 32) so that a "
-           "convergence window sees each point about twice (false: m always, the paper)"}),
-      setting<S, &S::small_source_gauss_newton>(
-          {"small-source-gauss-newton",
-           "small_source_gauss_newton",
-           {},
-           "",
-           "Small sources (fewer than batch-size x window / 2 points): the coarse stage takes "
-           "Gauss-Newton steps while the optimizer is the default Adam (false: the optimizer "
-           "always, the paper)"}),
-      setting<S, &S::pairing, &P::max_correspondence_distance>(
+      common(setting<S, &S::pairing, &P::max_correspondence_distance>(
           {"max-distance", "pairing.max_correspondence_distance", kScaledRange, "",
-           kMaxDistanceHelp}),
+           kMaxDistanceHelp})),
       setting<S, &S::max_iterations>(
           {"max-iterations", "max_iterations", kIterations, "",
            "Iteration limit (mini-batches); reaching it reports 'not converged'"}),
-      setting<S, &S::sampling, &SA::seed>(
+      common(setting<S, &S::sampling, &SA::seed>(
           {"seed",
            "sampling.seed",
            {0.0, kUint64Max},
            "",
-           "Seed of the mini-batch sampler (same seed, same result)"}),
-      setting<S, &S::optimizer, &O::momentum>(
-          {"momentum", "optimizer.momentum", kDecay, "", "Momentum: velocity decay"}),
-      setting<S, &S::optimizer, &O::beta1>(
-          {"beta1", "optimizer.beta1", kDecay, "", "Adam: decay of the gradient mean"}),
-      setting<S, &S::optimizer, &O::beta2>(
-          {"beta2", "optimizer.beta2", kDecay, "", "Adam: decay of the squared-gradient mean"}),
-      setting<S, &S::optimizer, &O::rms_decay>({"rms-decay", "optimizer.rms_decay", kDecay, "",
-                                                "RMSProp: decay of the squared-gradient mean"}),
-      setting<S, &S::optimizer, &O::epsilon>({"epsilon",
-                                              "optimizer.epsilon",
-                                              {0.0, 1.0, true, false},
-                                              "scaled units",
-                                              "Adam/RMSProp: added to the gradient RMS"}),
-      setting<S, &S::optimizer, &O::hessian_decay>(
-          {"hessian-decay", "optimizer.hessian_decay", kDecay, "",
-           "Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton "
-           "matrices"}),
+           "Seed of the mini-batch sampler (same seed, same result)"})),
       setting<S, &S::optimizer, &O::damping>(
           {"damping", "optimizer.damping", kDamping, "",
            "Gauss-Newton step: Levenberg damping, relative to the mean diagonal of the averaged "
@@ -207,13 +163,6 @@ std::vector<Setting<S>> stop_settings() {
            "",
            "Convergence: critical chi-square value (6 dof) of the Hotelling test on the "
            "window's mean gradient; larger stops earlier"}),
-      setting<S, &S::convergence, &C::max_path_efficiency>(
-          {"path-efficiency",
-           "convergence.max_path_efficiency",
-           {0.0, 1.0, true, false},
-           "",
-           "Convergence: a stationary window's net displacement over its path length must be at "
-           "most this (1 = straight travel, ~0.2 = jitter)"}),
       setting<S, &S::convergence, &C::translation_tolerance>(
           {"translation-tolerance", "convergence.translation_tolerance", kTolerance, "scaled units",
            "Convergence: a window whose steps each move the translation less than this also "
@@ -244,21 +193,6 @@ std::vector<Setting<S>> stop_settings() {
       setting<S, &S::refinement, &R::min_distance>({"min-distance", "refinement.min_distance",
                                                     kScaledRange, "",
                                                     "Refinement: lower bound of d_max"}),
-      setting<S, &S::refinement, &R::gauss_newton>(
-          {"refine-gauss-newton",
-           "refinement.gauss_newton",
-           {},
-           "",
-           "Refinement: the refinement stages take Gauss-Newton steps (the gauss-newton rule at "
-           "its own step, times the stage's multiplier) whatever the coarse stage's rule, "
-           "except with a robust kernel or trimming"}),
-      setting<S, &S::refinement, &R::settle_tolerance>(
-          {"settle-tolerance",
-           "refinement.settle_tolerance",
-           {0.0, 0.99},
-           "",
-           "Refinement: a refinement stage ends the run when the d_max it would hand on is "
-           "within this fraction of its own (the pairs have settled); 0 = run every stage"}),
   };
 }
 
@@ -297,17 +231,11 @@ std::vector<Setting<S>> result_and_pair_settings() {
       setting<S, &S::pairing, &P::trim_ratio>({"trim", "pairing.trim_ratio", kTrim, "", kTrimHelp}),
       setting<S, &S::neighborhood, &N::k>(
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
-      setting<S, &S::neighborhood, &N::flat_k>(
-          {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
-      setting<S, &S::neighborhood, &N::flatness>(
-          {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
-      setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
-      setting<S, &S::downsampling, &D::voxel_size_m>(
-          {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
+      common(setting<S, &S::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp})),
+      common(setting<S, &S::downsampling, &D::voxel_size_m>(
+          {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp})),
       setting<S, &S::downsampling, &D::downsample_to>(
           {"downsample-to", "downsampling.downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
-      setting<S, &S::scaling, &SC::robust>(
-          {"robust-scaling", "scaling.robust", {}, "", kRobustScalingHelp}),
       setting<S, &S::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
   };
 }
@@ -315,7 +243,7 @@ std::vector<Setting<S>> result_and_pair_settings() {
 // The pose uncertainty of the result (docs/uncertainty.md).
 std::vector<Setting<S>> uncertainty_settings() {
   return {
-      setting<S, &S::uncertainty, &U::method>(
+      common(setting<S, &S::uncertainty, &U::method>(
           {"uncertainty",
            "uncertainty.method",
            {},
@@ -323,24 +251,11 @@ std::vector<Setting<S>> uncertainty_settings() {
            "Pose uncertainty of the result: none, laplace (sandwich covariance of the re-paired "
            "optimum: the one to use for a pose graph), sgld (Bayesian ICP: Langevin samples) or "
            "svgd (Stein ICP: "
-           "particles, clustered into modes)"}),
+           "particles, clustered into modes)"})),
       setting<S, &S::uncertainty, &U::samples>(
           {"uncertainty-samples", "uncertainty.samples", {2.0, 1e6}, "", "sgld: samples kept"}),
-      setting<S, &S::uncertainty, &U::burn_in>({"burn-in",
-                                                "uncertainty.burn_in",
-                                                {0.0, 1e7},
-                                                "",
-                                                "sgld: iterations discarded before the first "
-                                                "sample"}),
       setting<S, &S::uncertainty, &U::thinning>(
           {"thinning", "uncertainty.thinning", {1.0, 1e4}, "", "sgld: iterations per sample"}),
-      setting<S, &S::uncertainty, &U::step>(
-          {"sgld-step",
-           "uncertainty.step",
-           {1e-4, 1.0},
-           "",
-           "sgld: step size, as the contraction per iteration along every axis (in the space "
-           "whitened by the Laplace precision)"}),
       setting<S, &S::uncertainty, &U::particles>(
           {"particles", "uncertainty.particles", {1.0, 1e4}, "", "svgd: particles K"}),
       setting<S, &S::uncertainty, &U::svgd_iterations>(
@@ -349,12 +264,6 @@ std::vector<Setting<S>> uncertainty_settings() {
            {1.0, 1e6},
            "",
            "svgd: iterations, one mini-batch shared by every particle each"}),
-      setting<S, &S::uncertainty, &U::svgd_step>(
-          {"svgd-step",
-           "uncertainty.svgd_step",
-           {1e-4, 10.0},
-           "posterior std",
-           "svgd: Adam's last step (it decays geometrically from a fifth of the initial spread)"}),
       setting<S, &S::uncertainty, &U::svgd_spread>(
           {"svgd-spread",
            "uncertainty.svgd_spread",
@@ -370,9 +279,49 @@ std::vector<Setting<S>> uncertainty_settings() {
            "laplace: the sandwich of the re-paired optimum and the grid's share; sgld, svgd: "
            "the likelihood tempered by the residuals' measured correlation (false: the "
            "fixed-pair Hessian with independent residuals, as the peers report)"}),
-      setting<S, &S::uncertainty, &U::block_size>(
-          {"block-size", "uncertainty.block_size", kScaledRange, "",
-           "Block side of the sandwich estimator that measures the correlation of residuals"}),
+  };
+}
+
+// The members no user names (settings.hpp, *Fixed rules*): checked by validate() with their C++
+// names, never CLI options or Python keywords.
+std::vector<Setting<S>> make_fixed_rules_table() {
+  return {
+      setting<S, &S::convergence, &C::max_path_efficiency>(
+          {"convergence.max_path_efficiency",
+           "convergence.max_path_efficiency",
+           {0.0, 1.0, true, false},
+           "",
+           "A stationary window's net displacement over its path length"}),
+      setting<S, &S::refinement, &R::gauss_newton>(
+          {"refinement.gauss_newton",
+           "refinement.gauss_newton",
+           {},
+           "",
+           "The refinement stages take Gauss-Newton steps"}),
+      setting<S, &S::refinement, &R::settle_tolerance>(
+          {"refinement.settle_tolerance",
+           "refinement.settle_tolerance",
+           {0.0, 0.99},
+           "",
+           "A refinement stage ends the run when its pairs have settled"}),
+      setting<S, &S::uncertainty, &U::burn_in>({"uncertainty.burn_in",
+                                                "uncertainty.burn_in",
+                                                {0.0, 1e7},
+                                                "",
+                                                "sgld: iterations before the first sample"}),
+      setting<S, &S::uncertainty, &U::step>({"uncertainty.step",
+                                             "uncertainty.step",
+                                             {1e-4, 1.0},
+                                             "",
+                                             "sgld: contraction per iteration"}),
+      setting<S, &S::uncertainty, &U::svgd_step>({"uncertainty.svgd_step",
+                                                  "uncertainty.svgd_step",
+                                                  {1e-4, 10.0},
+                                                  "posterior std",
+                                                  "svgd: Adam's last step"}),
+      setting<S, &S::uncertainty, &U::block_size>({"uncertainty.block_size",
+                                                   "uncertainty.block_size", kScaledRange, "",
+                                                   "Block side of the sandwich estimator"}),
   };
 }
 
@@ -412,17 +361,11 @@ std::vector<Setting<B>> make_batch_table() {
       setting<B, &B::pairing, &P::trim_ratio>({"trim", "pairing.trim_ratio", kTrim, "", kTrimHelp}),
       setting<B, &B::neighborhood, &N::k>(
           {"neighbors", "neighborhood.k", kNeighbors, "", kNeighborsHelp}),
-      setting<B, &B::neighborhood, &N::flat_k>(
-          {"flat-neighbors", "neighborhood.flat_k", kFlatNeighbors, "", kFlatNeighborsHelp}),
-      setting<B, &B::neighborhood, &N::flatness>(
-          {"flatness", "neighborhood.flatness", kFlatness, "", kFlatnessHelp}),
       setting<B, &B::num_threads>({"threads", "num_threads", kThreads, "", kThreadsHelp}),
       setting<B, &B::downsampling, &D::voxel_size_m>(
           {"voxel-size", "downsampling.voxel_size_m", kVoxelSize, "m", kVoxelSizeHelp}),
       setting<B, &B::downsampling, &D::downsample_to>(
           {"downsample-to", "downsampling.downsample_to", kDownsampleTo, "", kDownsampleToHelp}),
-      setting<B, &B::robust_scaling>(
-          {"robust-scaling", "robust_scaling", {}, "", kRobustScalingHelp}),
       setting<B, &B::record_trace>({"record-trace", "record_trace", {}, "", kTraceHelp, true}),
   };
 }
@@ -431,6 +374,11 @@ std::vector<Setting<B>> make_batch_table() {
 
 const std::vector<Setting<SgdSettings>>& sgd_settings_table() {
   static const std::vector<Setting<SgdSettings>> table = make_sgd_table();
+  return table;
+}
+
+const std::vector<Setting<SgdSettings>>& sgd_fixed_rules_table() {
+  static const std::vector<Setting<SgdSettings>> table = make_fixed_rules_table();
   return table;
 }
 

@@ -1,4 +1,4 @@
-"""The docs agree with the code where a machine can tell: the keyword tables of docs/python.md
+"""The docs agree with the code where a machine can tell: the keyword tables of docs/python-settings.md
 against the settings' defaults, the JSON fields of docs/cli.md against `sgdicp register --json`,
 and the data paths that the README and `--help` name."""
 
@@ -49,7 +49,7 @@ def documented_matches(doc: str, value) -> bool:
 
 
 def test_python_md_keyword_defaults_are_the_settings_defaults():
-    tables = keyword_tables((DOCS / "python.md").read_text())
+    tables = keyword_tables((DOCS / "python-settings.md").read_text())
     assert len(tables) >= 2
     checked = 0
     for header, rows in tables:
@@ -63,7 +63,7 @@ def test_python_md_keyword_defaults_are_the_settings_defaults():
             except AttributeError:
                 continue
             assert documented_matches(default, value), (
-                f"docs/python.md: {keyword} documents {default}, the code has {value!r}")
+                f"docs/python-settings.md: {keyword} documents {default}, the code has {value!r}")
             checked += 1
     assert checked >= 25
 

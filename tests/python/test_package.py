@@ -124,12 +124,12 @@ def run_check(stub_text: str, tmp_path: Path) -> subprocess.CompletedProcess:
 
 def test_check_fails_on_a_keyword_the_stub_lacks(tmp_path):
     text = STUB.read_text()
-    line = "        settle_tolerance: float = ...,\n"
+    line = "        step_decay: float = ...,\n"
     assert line in text
     result = run_check(text.replace(line, "", 1), tmp_path)  # from Settings.__init__ only
     assert result.returncode == 1
     assert result.stdout.splitlines() == [
-        f"{tmp_path / '_core.pyi'}: Settings.__init__: keyword settle_tolerance= of the table is "
+        f"{tmp_path / '_core.pyi'}: Settings.__init__: keyword step_decay= of the table is "
         "missing"
     ]
     assert run_check(text, tmp_path).returncode == 0

@@ -305,7 +305,9 @@ def test_result_has_every_field(scene):
     # The coarse phase and 3 refinement stages, or fewer once the pairs settle (settle_tolerance);
     # all four when settling is off.
     assert 2 <= r.stages <= 4
-    assert sgd_icp.register(source, reference, settle_tolerance=0).stages == 4
+    every_stage = sgd_icp.Settings()
+    every_stage.refinement.settle_tolerance = 0  # a fixed rule: an attribute, not a keyword
+    assert sgd_icp.register(source, reference, settings=every_stage).stages == 4
     assert r.evaluated_points == 2000 and 0 < r.inliers <= r.evaluated_points
     assert r.inlier_ratio == pytest.approx(r.inliers / r.evaluated_points)
     assert 0 < r.inlier_rmse_m < 0.03

@@ -1,10 +1,11 @@
 """Settings mirror the C++ SgdSettings (names and defaults, as in docs/registration.md), and the
-flat keyword overrides mean what docs/python.md says."""
+flat keyword overrides mean what docs/python-settings.md says."""
 
 from __future__ import annotations
 
 import copy
 import pickle
+from pathlib import Path
 
 import pytest
 
@@ -24,12 +25,6 @@ DEFAULTS = {
     "max_correspondence_distance": Distance.scaled(0.5),
     "optimizer.type": OptimizerType.adam,
     "optimizer.learning_rate": 0.01,
-    "optimizer.beta1": 0.9,
-    "optimizer.beta2": 0.999,
-    "optimizer.epsilon": 1e-8,
-    "optimizer.momentum": 0.9,
-    "optimizer.rms_decay": 0.9,
-    "optimizer.hessian_decay": 0.9,
     "optimizer.damping": 1e-3,
     "convergence.window": 20,
     "convergence.chi2": 12.59,
@@ -67,6 +62,8 @@ PAPER_CHANGES = {
     "average_iterates": False,
     "cost": CostType.point_to_point,
     "downsample_to": 0,
+    "adapt_small_sources": False,
+    "robust_scaling": False,
 }
 
 
@@ -101,16 +98,9 @@ def test_keyword_overrides_set_the_documented_fields():
         min_distance=0.002,
         max_iterations=50,
         seed=7,
-        momentum=0.8,
-        beta1=0.8,
-        beta2=0.99,
-        rms_decay=0.8,
-        epsilon=1e-6,
-        hessian_decay=0.8,
         damping=0.01,
         window=10,
         chi2=10.0,
-        path_efficiency=0.4,
         translation_tolerance=1e-5,
         rotation_tolerance=1e-5,
         refine_stages=2,
@@ -133,16 +123,9 @@ def test_keyword_overrides_set_the_documented_fields():
         "refinement.min_distance": Distance.metres(0.002),
         "max_iterations": 50,
         "seed": 7,
-        "optimizer.momentum": 0.8,
-        "optimizer.beta1": 0.8,
-        "optimizer.beta2": 0.99,
-        "optimizer.rms_decay": 0.8,
-        "optimizer.epsilon": 1e-6,
-        "optimizer.hessian_decay": 0.8,
         "optimizer.damping": 0.01,
         "convergence.window": 10,
         "convergence.chi2": 10.0,
-        "convergence.max_path_efficiency": 0.4,
         "convergence.translation_tolerance": 1e-5,
         "convergence.rotation_tolerance": 1e-5,
         "refinement.stages": 2,
@@ -280,3 +263,57 @@ def test_repr_shows_every_attribute_with_its_value():
     assert "method=UncertaintyType.sgld" in text and "viewpoint=(1.0, 2.0, 3.0)" in text
     assert "cost=CostType.plane_to_plane" in repr(b) and "max_iterations=30" in repr(b)
     assert repr(sgd_icp.Distance.metres(0.5)) == "Distance.metres(0.5)"
+
+
+@pytest.mark.parametrize("keyword", ["beta1", "settle_tolerance", "cap_batch_to_source"])
+def test_a_retired_keyword_says_it_is_no_longer_a_setting(keyword):
+    import sgd_icp
+
+    with pytest.raises(TypeError, match=f"unknown setting '{keyword}'.*no longer a setting"):
+        sgd_icp.Settings(**{keyword: 1})
+
+
+def test_register_help_lists_the_common_settings_before_the_grouped_others():
+    import sgd_icp
+
+    doc = sgd_icp.register.__doc__
+    common = doc.index("The common ones:")
+    others = doc.index("The others, by the part of the run that reads them:")
+    assert common < others
+    for keyword in ("voxel_size", "max_distance", "seed", "threads", "uncertainty"):
+        assert common < doc.index(f"{keyword} (", common) < others, keyword
+    for part in ("Step rule:", "Refinement:", "Uncertainty:"):
+        assert others < doc.index(part, others), part
+    assert doc.index("refine_stages (", others) > others
+
+
+def test_the_stub_lists_the_common_keywords_first():
+    import inspect
+
+    import sgd_icp
+
+    stub = (Path(sgd_icp.__file__).parent / "_core.pyi").read_text()
+    register = stub[stub.index("def register("):]
+    header = register[: register.index(") ->")]
+    names = [line.strip().split(":")[0] for line in header.splitlines()[1:]]
+    star = names.index("*")
+    assert names[star + 1: star + 6] == ["max_distance", "seed", "threads", "voxel_size",
+                                         "uncertainty"], names[star:star + 8]
+    assert inspect.signature  # the stub is parsed as text: its order is what IDEs show
+
+
+def test_odometry_takes_grouped_settings_like_register():
+    import numpy as np
+
+    import sgd_icp
+
+    settings = sgd_icp.Settings(refine_stages=2)
+    odometry = sgd_icp.Odometry(settings=settings, voxel_size=0.5)
+    rng = np.random.default_rng(4)
+    frame = rng.uniform(-10, 10, (3000, 3)).astype(np.float32)
+    frame[:, 2] = np.round(frame[:, 2])  # a few planes: something to register
+    odometry.register_frame(frame)
+    odometry.register_frame(frame)
+    assert not odometry.reports[1].failed
+    with pytest.raises(TypeError, match="settings must be a sgd_icp.Settings"):
+        sgd_icp.Odometry(settings=sgd_icp.BatchSettings())

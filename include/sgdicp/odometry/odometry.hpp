@@ -106,7 +106,7 @@ struct OdometrySettings {
   /// converges in a few mini-batches and Adam's steps of one length took 80-260 (the coarse stage
   /// was half of a hand-held LiDAR run's time; docs/design.md, *Tracking with Gauss-Newton
   /// steps*). The wide-basin retry keeps the optimizer (false: the settings' optimizer for every
-  /// start; the CLI sets it when --optimizer, --preconditioner or --learning-rate is given,
+  /// start; the CLI sets it when --optimizer or --learning-rate is given,
   /// Python when optimizer= or learning_rate= is).
   bool tracking_gauss_newton = true;
   /// Each frame with times is deskewed before it is registered and enters the map: moved to its

@@ -37,13 +37,6 @@ enum class SettingNames { field, cli, python };
 struct SamplingSettings {
   /// m of the paper: source points per mini-batch.
   std::size_t batch_size = 160;
-  /// Small sources: m at most 2 x source points / window (at least kMinCappedBatch), so that one
-  /// convergence window still sees every source point about twice (batch_size_for). Iterations
-  /// are set by how far the coarse stage travels, not by m: on the 361-point bunny m = 36 takes
-  /// the same ~220 iterations and errors as m = 160, at a quarter of the pairs (6.5 ms against
-  /// 17.7 ms). Sources of at least batch_size x window / 2 points (1,600 by default) keep
-  /// m; false keeps it always (the paper).
-  bool cap_batch_to_source = true;
   /// Seed of the mini-batch sampler; same inputs and seed give the same result.
   std::uint64_t seed = 2019;
 
@@ -108,12 +101,16 @@ struct DownsamplingSettings {
 /// uncertainty; at the top level what the run as a whole reads.
 struct SgdSettings {
   SamplingSettings sampling{};
-  /// Small sources (the same ones: fewer than batch_size x window / 2 points) take Gauss-Newton
-  /// steps in the coarse stage while `optimizer` is the default Adam (optimizer_for): on the
-  /// bunny moved 30-90 deg it is as robust as Adam or more, 1.5x more precise in rotation and
-  /// needs 120 instead of 180-700 mini-batches (docs/design.md, *Small sources*). A step rule
-  /// set by the user is kept; false keeps `optimizer` always (the paper).
-  bool small_source_gauss_newton = true;
+  /// Small sources (fewer than batch_size x window / 2 points, 1,600 by default; is_small_source)
+  /// get two rules the paper lacks. Their mini-batch is capped at 2 x source points / window (at
+  /// least kMinCappedBatch), so that one window still sees every point about twice
+  /// (batch_size_for): iterations are set by how far the coarse stage travels, not by m, so the
+  /// 361-point bunny takes the same ~220 iterations and errors at m = 36 as at 160, at half the
+  /// time. And their coarse stage takes Gauss-Newton steps while `optimizer` is the default Adam
+  /// (optimizer_for): on the bunny moved 30-90 deg as robust as Adam or more, 1.5x more precise
+  /// in rotation, 120 instead of 180-700 mini-batches (docs/design.md, *Small sources*). Not a
+  /// user setting: paper() turns both off, every other run keeps them.
+  bool adapt_small_sources = true;
   /// Default: Adam with a step of 0.01 scaled units, measured best over the real pairs
   /// (docs/design.md): it keeps the paper's wide basin (KITTI copies moved by 30 m), which the
   /// greedier Gauss-Newton step loses, and reaches cm accuracy with the refinement stages.
@@ -179,23 +176,22 @@ struct SgdSettings {
   bool operator==(const SgdSettings&) const = default;
 };
 
-/// The smallest mini-batch cap_batch_to_source leaves (a smaller source is an error).
+/// The smallest mini-batch adapt_small_sources leaves (a smaller source is an error).
 inline constexpr std::size_t kMinCappedBatch = 32;
 
 /// The mini-batch size m of a run on a source of `source_points` points: batch_size, capped for
-/// small sources when cap_batch_to_source says so.
+/// small sources when adapt_small_sources says so.
 [[nodiscard]] std::size_t batch_size_for(const SgdSettings& settings, std::size_t source_points);
 
 /// Whether a source of `source_points` points is small: fewer than batch_size x window / 2, so
 /// that m covers it about twice per convergence window.
 [[nodiscard]] bool is_small_source(const SgdSettings& settings, std::size_t source_points);
 /// Whether `optimizer` is the step rule nobody chose: the default's type at its own learning
-/// rate with its own constants. Its damping and its Hessian's decay may differ: they shape the
-/// Gauss-Newton steps that then replace it (a small source's coarse stage, optimizer_for; the
-/// odometry's tracking).
+/// rate. Its damping may differ: it shapes the Gauss-Newton steps that then replace it (a small
+/// source's coarse stage, optimizer_for; the odometry's tracking).
 [[nodiscard]] bool is_default_step_rule(const OptimizerSettings& optimizer);
 /// The coarse stage's step rule on a source of `source_points` points: Gauss-Newton at its own
-/// step for a small source when small_source_gauss_newton says so and `optimizer` is the
+/// step for a small source when adapt_small_sources says so and `optimizer` is the
 /// default step rule (is_default_step_rule), else `optimizer`.
 [[nodiscard]] OptimizerSettings optimizer_for(const SgdSettings& settings,
                                               std::size_t source_points);
@@ -284,6 +280,9 @@ struct SettingDescription {
   std::vector<std::string_view> (*choices)() = nullptr;  ///< the names of a choice
   /// Not a CLI option (the CLI chooses the cost with --method and records a trace with --trace).
   bool keyword_only = false;
+  /// One of the few a user of the command sets: Python's signatures and help list these first
+  /// (the CLI's --help shows them, with the command's own options).
+  bool common = false;
 
   /// `name` as the user spells it: --learning-rate, learning_rate=, optimizer.learning_rate.
   [[nodiscard]] std::string spelled(SettingNames names) const;
@@ -302,8 +301,19 @@ struct Setting : SettingDescription {
 /// Every setting of SgdSettings a user can name, in the order in which they are applied
 /// ("optimizer" first: it sets the learning rate, which a later "learning-rate" overrides).
 [[nodiscard]] const std::vector<Setting<SgdSettings>>& sgd_settings_table();
+/// The members of SgdSettings that no user names: fixed rules of the default that C++ code (the
+/// tests) may switch: convergence.max_path_efficiency, refinement.gauss_newton and
+/// settle_tolerance, and the samplers' uncertainty.burn_in, step, svgd_step and block_size (each
+/// member says why its value holds). validate() checks their ranges with their C++ names. The
+/// other members outside sgd_settings_table() are set by paper() alone (adapt_small_sources,
+/// scaling.robust) or are the surfaces' own (NeighborhoodSettings::validate).
+[[nodiscard]] const std::vector<Setting<SgdSettings>>& sgd_fixed_rules_table();
 /// Every setting of BatchSettings a user can name (those shared with SGD have the same name).
 [[nodiscard]] const std::vector<Setting<BatchSettings>>& batch_settings_table();
+
+/// The part of the run that reads the setting whose C++ member is `field` ("Step rule" for
+/// "optimizer.learning_rate"), the heading under which --help-all and Python's help group it.
+[[nodiscard]] std::string_view setting_part(std::string_view field);
 
 /// The setting called `name` ('_' may stand for '-'), or nullptr.
 [[nodiscard]] const Setting<SgdSettings>* find_sgd_setting(std::string_view name);

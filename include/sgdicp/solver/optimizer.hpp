@@ -42,17 +42,30 @@ constexpr std::string_view enum_noun(OptimizerType) {
   return parse_enum<OptimizerType>(name);
 }
 
+// The rules' constants. Momentum, RMSProp and Adam keep their published values (Adam: Kingma and
+// Ba 2015, whose "Adam-SGD" the paper runs with them); no pairs file or sequence was measured to
+// gain from others, so they are not settings (docs/registration.md, *Why each setting is there*).
+inline constexpr double kMomentum = 0.9;     ///< heavy ball: velocity decay
+inline constexpr double kAdamBeta1 = 0.9;    ///< Adam: decay of the mean of gradients
+inline constexpr double kAdamBeta2 = 0.999;  ///< Adam: decay of the mean of squared gradients
+inline constexpr double kRmsDecay = 0.9;     ///< RMSProp: decay of the mean of squared gradients
+inline constexpr double kRmsEpsilon = 1e-8;  ///< Adam, RMSProp: added to the root mean square
+/// Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices. 0.9
+/// averages about ten mini-batches: enough to keep A well conditioned when one batch is
+/// degenerate, few enough to follow the pose.
+inline constexpr double kHessianDecay = 0.9;
+
 /// The step size each rule runs with unless told otherwise, the one table that the presets,
 /// the CLI's --optimizer and Python's optimizer= read. Adaptive rules (Adam, RMSProp) take a
 /// length per step in scaled units; the fixed step a gradient multiplier (the paper's 2), and
-/// momentum the same once its velocity has built up (hence 2 (1 - momentum)); Gauss-Newton a
+/// momentum the same once its velocity has built up (hence 2 (1 - kMomentum)); Gauss-Newton a
 /// fraction of the Newton step (1 = the full step).
-[[nodiscard]] constexpr double default_learning_rate(OptimizerType type, double momentum = 0.9) {
+[[nodiscard]] constexpr double default_learning_rate(OptimizerType type) {
   switch (type) {
     case OptimizerType::sgd:
       return 2.0;
     case OptimizerType::momentum:
-      return 2.0 * (1.0 - momentum);
+      return 2.0 * (1.0 - kMomentum);
     case OptimizerType::gauss_newton:
       return 1.0;
     case OptimizerType::rmsprop:
@@ -66,13 +79,6 @@ struct OptimizerSettings {
   OptimizerType type = OptimizerType::sgd;
   /// alpha of eq. 3, in scaled units per unit gradient. The paper uses 2 with a fixed step.
   double learning_rate = 2.0;
-  double momentum = 0.9;   ///< momentum: velocity decay (heavy ball)
-  double beta1 = 0.9;      ///< Adam: decay of the mean of gradients
-  double beta2 = 0.999;    ///< Adam: decay of the mean of squared gradients
-  double rms_decay = 0.9;  ///< RMSProp: decay of the mean of squared gradients
-  double epsilon = 1e-8;   ///< Adam/RMSProp: added to the root mean square
-  /// Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices.
-  double hessian_decay = 0.9;
   /// Gauss-Newton: Levenberg damping, relative to the mean diagonal of the averaged matrix.
   double damping = 1e-3;
 
@@ -82,9 +88,8 @@ struct OptimizerSettings {
   bool operator==(const OptimizerSettings&) const = default;
 };
 
-/// `settings` stepping with Gauss-Newton at its own step, its other parameters kept (the damping
-/// and the Hessian's decay are Gauss-Newton's): the step of the refinement stages, of a small
-/// source's coarse stage and of the odometry's tracking.
+/// `settings` stepping with Gauss-Newton at its own step, its damping kept: the step of the
+/// refinement stages, of a small source's coarse stage and of the odometry's tracking.
 [[nodiscard]] inline OptimizerSettings with_gauss_newton_steps(OptimizerSettings settings) {
   settings.type = OptimizerType::gauss_newton;
   settings.learning_rate = default_learning_rate(OptimizerType::gauss_newton);
@@ -113,26 +118,25 @@ class Optimizer {
       case OptimizerType::sgd:
         return -alpha * g;
       case OptimizerType::momentum:
-        velocity_ = settings_.momentum * velocity_ + g;
+        velocity_ = kMomentum * velocity_ + g;
         return -alpha * velocity_;
       case OptimizerType::rmsprop:
-        second_ = settings_.rms_decay * second_ + (1.0 - settings_.rms_decay) * g.cwiseProduct(g);
-        return -alpha * g.cwiseQuotient((second_.cwiseSqrt().array() + settings_.epsilon).matrix());
+        second_ = kRmsDecay * second_ + (1.0 - kRmsDecay) * g.cwiseProduct(g);
+        return -alpha * g.cwiseQuotient((second_.cwiseSqrt().array() + kRmsEpsilon).matrix());
       case OptimizerType::adam: {
-        first_ = settings_.beta1 * first_ + (1.0 - settings_.beta1) * g;
-        second_ = settings_.beta2 * second_ + (1.0 - settings_.beta2) * g.cwiseProduct(g);
-        const double c1 = 1.0 - std::pow(settings_.beta1, static_cast<double>(t_));
-        const double c2 = 1.0 - std::pow(settings_.beta2, static_cast<double>(t_));
+        first_ = kAdamBeta1 * first_ + (1.0 - kAdamBeta1) * g;
+        second_ = kAdamBeta2 * second_ + (1.0 - kAdamBeta2) * g.cwiseProduct(g);
+        const double c1 = 1.0 - std::pow(kAdamBeta1, static_cast<double>(t_));
+        const double c2 = 1.0 - std::pow(kAdamBeta2, static_cast<double>(t_));
         const PoseVector m_hat = first_ / c1;
         const PoseVector v_hat = second_ / c2;
-        return -alpha *
-               m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + settings_.epsilon).matrix());
+        return -alpha * m_hat.cwiseQuotient((v_hat.cwiseSqrt().array() + kRmsEpsilon).matrix());
       }
       case OptimizerType::gauss_newton: {
         // Averaging the curvature over batches keeps A well conditioned when one batch is
         // degenerate; the gradient stays the fresh, unbiased mini-batch gradient.
-        hessian_ = settings_.hessian_decay * hessian_ + (1.0 - settings_.hessian_decay) * h;
-        const double c = 1.0 - std::pow(settings_.hessian_decay, static_cast<double>(t_));
+        hessian_ = kHessianDecay * hessian_ + (1.0 - kHessianDecay) * h;
+        const double c = 1.0 - std::pow(kHessianDecay, static_cast<double>(t_));
         Eigen::Matrix<double, 6, 6> a = hessian_ / c;
         const double mean_diagonal = a.trace() / 6.0;
         if (!(mean_diagonal > 0.0)) return PoseVector::Zero();  // no pairs yet: no curvature
