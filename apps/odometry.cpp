@@ -332,7 +332,7 @@ class StopOnSignal {
 // resident memory grew by 32 MB after the first 1,000 frames, to a peak of 187 MB, while the
 // memory in use grew by 13 MB (the map's new points and the frames' reports). With the threshold
 // fixed at glibc's initial 128 kB, large buffers go back at their free: +17 MB, peak 96 MB, the
-// frames' registration time unchanged (bench/soak_odometry.py; docs/odometry.md, Long runs). A
+// frames' registration time unchanged (bench/soak_odometry.py; docs/long-runs.md, Long runs). A
 // 4 MB threshold kept the frames' buffers in the heap and the memory as high as without.
 constexpr int kMmapThresholdBytes = 128 * 1024;
 
@@ -663,7 +663,7 @@ void add_localize_command(CLI::App& app) {
       "frame is placed by the global registration (or --init); every later one from the motion "
       "model's prediction, with the odometry's retries. A frame the map does not hold is "
       "reported lost, not placed. Writes each frame's pose in the map's coordinates "
-      "(docs/odometry.md, Localization).");
+      "(docs/localization.md).");
   cmd->add_option("MAP", o->localize_in, "The map: a point cloud file (PLY, PCD, ...), metres")
       ->required();
   add_frame_options(*cmd, o);

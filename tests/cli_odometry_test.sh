@@ -191,7 +191,7 @@ else
 fi
 BALM="$SHARED/balm_handheld_lidar/scans"
 if [ -d "$BALM" ] && [ -d "$SHARED/kitti_odometry_seq00/velodyne" ]; then
-  # A hostile folder (docs/odometry.md, *Long runs*): frames out of order (12 before 10 and 11),
+  # A hostile folder (docs/long-runs.md, *Long runs*): frames out of order (12 before 10 and 11),
   # one twice, an empty file, a truncated file, a KITTI car scan among the hand-held LiDAR's, a gap
   # of 15 scans and the way back. Each is reported on its own row; the run goes on.
   mkdir -p "$tmp/hostile"

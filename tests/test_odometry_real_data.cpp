@@ -210,7 +210,7 @@ TEST(OdometryHandheldLidar, CroppedScansEveryWrongFrameIsDoubtfulAndUncroppedNon
 // Kinect frames cropped to 1.5 m (7-Scenes, the first 200): no frame is wrong (10 cm / 2 deg
 // frame to frame) and at most the second is doubtful, its prediction unknown (measured over the
 // 600 frames: 0 wrong, 1 doubtful; yet the end is 0.27 m / 14.5 deg off, a bias of 0.024 deg a
-// frame that no per-frame test sees: docs/odometry.md, *Doubtful frames*).
+// frame that no per-frame test sees: docs/long-runs.md, *Doubtful frames*).
 TEST(OdometrySevenScenes, CroppedTo1p5MetresNoWrongFrameGoesUnflagged) {
   const auto folder = std::filesystem::path(SGDICP_SHARED_DATA) / "sevenscenes_redkitchen";
   if (!std::filesystem::exists(folder / "camera-intrinsics.txt")) GTEST_SKIP() << "no " << folder;

@@ -1865,7 +1865,7 @@ class Odometry:
         """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),
         and returns its (4, 4) pose in the first frame's coordinates (the first frame: the
         identity). times: None, or each point's time (N,), seconds, any origin: the frame is then
-        deskewed (deskew='auto', docs/odometry.md). A frame that fails (see last_report) gets the
+        deskewed (deskew='auto', docs/deskewing.md). A frame that fails (see last_report) gets the
         predicted pose.
         """
     def skip_frame(self, message: str) -> npt.NDArray[np.float64]:
@@ -1922,7 +1922,7 @@ class Localizer(Odometry):
     """Localization in a map made before: an Odometry whose map is fixed (never extended), the first
     frame placed by the global registration (or from init), every later one from the motion
     model's prediction; a frame the map does not hold is lost, not placed. Poses are in the map's
-    coordinates (docs/odometry.md, Localization).
+    coordinates (docs/localization.md).
     """
 
     def __init__(

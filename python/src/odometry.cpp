@@ -243,7 +243,7 @@ void bind_odometry(py::module_& m) {
           "Registers the next frame, an (N, 3) float32/float64 array in its sensor frame "
           "(metres), and returns its (4, 4) pose in the first frame's coordinates (the first "
           "frame: the identity). times: None, or each point's time (N,), seconds, any origin: the "
-          "frame is then deskewed (deskew='auto', docs/odometry.md). A frame that fails (see "
+          "frame is then deskewed (deskew='auto', docs/deskewing.md). A frame that fails (see "
           "last_report) gets the predicted pose.")
       .def(
           "skip_frame",
@@ -315,7 +315,7 @@ void bind_odometry(py::module_& m) {
       "Localization in a map made before: an Odometry whose map is fixed (never extended), the "
       "first frame placed by the global registration (or from init), every later one from the "
       "motion model's prediction; a frame the map does not hold is lost, not placed. Poses are "
-      "in the map's coordinates (docs/odometry.md, Localization).")
+      "in the map's coordinates (docs/localization.md).")
       .def(py::init([](const py::handle& map, const py::object& init, const std::string& method,
                        const py::object& settings, const py::kwargs& kwargs) {
              return make_localizer(map, init, method, settings, kwargs);

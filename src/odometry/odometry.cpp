@@ -389,7 +389,7 @@ constexpr double kConfirmVoxels = 2.0;
 // when the prediction is uncertain by more than kUnsureVoxels (the adaptive threshold's sigma:
 // 13-25 voxels on the hand-held LiDAR, at most 1.2 on 7-Scenes at 30 Hz): along that motion the
 // cost has no pull back to the truth and the frame keeps what its start gave it, at an overlap
-// as high as the right pose's (docs/odometry.md, *Doubtful frames*).
+// as high as the right pose's (docs/long-runs.md, *Doubtful frames*).
 constexpr double kUnconstrainedBelow = 0.05;
 constexpr double kUnsureVoxels = 2.0;
 

@@ -6,7 +6,7 @@
 // prediction, with the odometry's retries (the last pose, the global registration, the wide
 // basin). A frame whose best registration overlaps the map doubtfully (the map does not cover
 // what it sees) is lost, not placed, and the global registration re-localizes the frames after it
-// once the map is seen again. docs/odometry.md, "Localization".
+// once the map is seen again. docs/localization.md, "Localization".
 #include <optional>
 #include <string_view>
 #include <utility>

@@ -112,7 +112,7 @@ struct OdometrySettings {
   /// Each frame with times is deskewed before it is registered and enters the map: moved to its
   /// sweep's middle by the predicted motion over the sweep (constant velocity, the sweep taken to
   /// last from one frame to the next: deskewed_by_motion), once a motion is known
-  /// (docs/odometry.md, *Deskewing*). A frame without times is registered as it is.
+  /// (docs/deskewing.md). A frame without times is registered as it is.
   DeskewMode deskew = DeskewMode::automatic;
 
   /// Throws InvalidSettingsError naming the first setting out of range (odometry_settings_table),

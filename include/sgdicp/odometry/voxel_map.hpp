@@ -4,7 +4,8 @@
 // updated in place (points added frame by frame, far cells dropped), so its memory is bounded by
 // the region around the sensor and not by the length of the sequence. The map is its own
 // nearest-neighbour index (a voxel hash of cells of 2x2x2 voxels, src/index/voxel_hash.hpp): a
-// frame is registered against it as it stands, with no copy and no build (docs/odometry.md).
+// frame is registered against it as it stands, with no copy and no build
+// (docs/odometry-results.md, *The map is its own index*).
 #include <cstddef>
 #include <cstdint>
 #include <memory>

@@ -3,7 +3,7 @@
 // coordinates, thinned to one centroid per voxel as they come in. Unlike the local VoxelMap, which
 // the registration uses and which forgets what lies behind the sensor, it keeps everything; its
 // memory grows with the space covered (the voxels it holds), not with the number of frames: a
-// place seen again adds no voxel. docs/odometry.md, "The whole map".
+// place seen again adds no voxel. docs/localization.md, "The whole map".
 #include <cstddef>
 #include <memory>
 
