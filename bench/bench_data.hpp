@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,14 +35,9 @@ inline std::filesystem::path data_dir() {
   return SGDICP_BENCH_DATA_DIR;
 }
 
-/// KITTI .bin (124k points), Kinect binary_compressed PCD (271k), car CSV (25k), ETH PLY (38k).
-inline std::vector<Dataset> available_datasets() {
-  const std::vector<std::pair<std::string, std::string>> wanted = {
-      {"kitti", "kitti_seq00.txt"},
-      {"kinect", "pcl_kinect_frames.txt"},
-      {"car", "libpointmatcher_car.txt"},
-      {"eth", "eth_kinect_map_moved_copies.txt"},
-  };
+/// The first pair of each (name, pairs file) whose files exist.
+inline std::vector<Dataset> datasets(
+    const std::vector<std::pair<std::string, std::string>>& wanted) {
   std::vector<Dataset> out;
   for (const auto& [name, file] : wanted) {
     const auto path = data_dir() / "pairs" / file;
@@ -59,6 +55,16 @@ inline std::vector<Dataset> available_datasets() {
     }
   }
   return out;
+}
+
+/// KITTI .bin (124k points), Kinect binary_compressed PCD (271k), car CSV (25k), ETH PLY (38k).
+inline std::vector<Dataset> available_datasets() {
+  return datasets({
+      {"kitti", "kitti_seq00.txt"},
+      {"kinect", "pcl_kinect_frames.txt"},
+      {"car", "libpointmatcher_car.txt"},
+      {"eth", "eth_kinect_map_moved_copies.txt"},
+  });
 }
 
 /// Reads each file once per process.
