@@ -182,22 +182,6 @@ class OptimizerSettings:
     learning_rate=. Default 0.01. (That is Settings()'s; a OptimizerSettings() of its own has
     2.0.)
     """
-    momentum: float
-    """Momentum: velocity decay, in [0, 1). Keyword momentum=. Default 0.9."""
-    beta1: float
-    """Adam: decay of the gradient mean, in [0, 1). Keyword beta1=. Default 0.9."""
-    beta2: float
-    """Adam: decay of the squared-gradient mean, in [0, 1). Keyword beta2=. Default 0.999."""
-    rms_decay: float
-    """RMSProp: decay of the squared-gradient mean, in [0, 1). Keyword rms_decay=. Default 0.9."""
-    epsilon: float
-    """Adam/RMSProp: added to the gradient RMS, scaled units in (0, 1]. Keyword epsilon=. Default
-    1e-08.
-    """
-    hessian_decay: float
-    """Gauss-Newton: decay of the running average of the mini-batch Gauss-Newton matrices, in [0,
-    1). Keyword hessian_decay=. Default 0.9.
-    """
     damping: float
     """Gauss-Newton step: Levenberg damping, relative to the mean diagonal of the averaged matrix
     (batch methods: the initial Levenberg-Marquardt damping), in [0, 100]. Keyword damping=.
@@ -228,8 +212,8 @@ class ConvergenceSettings:
     gradient; larger stops earlier, in (0, 1000]. Keyword chi2=. Default 12.59.
     """
     max_path_efficiency: float
-    """Convergence: a stationary window's net displacement over its path length must be at most this
-    (1 = straight travel, ~0.2 = jitter), in (0, 1]. Keyword path_efficiency=. Default 0.5.
+    """A stationary window's net displacement over its path length, in (0, 1]. A fixed rule. Default
+    0.5.
     """
     translation_tolerance: float
     """Convergence: a window whose steps each move the translation less than this also ends a stage
@@ -268,14 +252,10 @@ class RefinementSettings:
     m. Keyword min_distance=. Default Distance.scaled(0.0001).
     """
     gauss_newton: bool
-    """Refinement: the refinement stages take Gauss-Newton steps (the gauss-newton rule at its own
-    step, times the stage's multiplier) whatever the coarse stage's rule, except with a robust
-    kernel or trimming. Keyword refine_gauss_newton=. Default True.
-    """
+    """The refinement stages take Gauss-Newton steps. A fixed rule. Default True."""
     settle_tolerance: float
-    """Refinement: a refinement stage ends the run when the d_max it would hand on is within this
-    fraction of its own (the pairs have settled); 0 = run every stage, in [0, 0.99]. Keyword
-    settle_tolerance=. Default 0.05.
+    """A refinement stage ends the run when its pairs have settled, in [0, 0.99]. A fixed rule.
+    Default 0.05.
     """
 
     def __init__(self) -> None: ...
@@ -298,15 +278,11 @@ class UncertaintySettings:
     samples: int
     """sgld: samples kept, in [2, 1000000]. Keyword uncertainty_samples=. Default 200."""
     burn_in: int
-    """sgld: iterations discarded before the first sample, in [0, 10000000]. Keyword burn_in=.
-    Default 50.
-    """
+    """sgld: iterations before the first sample, in [0, 10000000]. A fixed rule. Default 50."""
     thinning: int
     """sgld: iterations per sample, in [1, 10000]. Keyword thinning=. Default 5."""
     step: float
-    """sgld: step size, as the contraction per iteration along every axis (in the space whitened by
-    the Laplace precision), in [0.0001, 1]. Keyword sgld_step=. Default 0.1.
-    """
+    """sgld: contraction per iteration, in [0.0001, 1]. A fixed rule. Default 0.1."""
     particles: int
     """svgd: particles K, in [1, 10000]. Keyword particles=. Default 32."""
     svgd_iterations: int
@@ -314,9 +290,7 @@ class UncertaintySettings:
     svgd_iterations=. Default 50.
     """
     svgd_step: float
-    """svgd: Adam's last step (it decays geometrically from a fifth of the initial spread),
-    posterior std in [0.0001, 10]. Keyword svgd_step=. Default 0.05.
-    """
+    """svgd: Adam's last step, posterior std in [0.0001, 10]. A fixed rule. Default 0.05."""
     svgd_spread: float
     """svgd: spread of the initial particles around the estimate, in Laplace standard deviations
     (wide values reach other modes), posterior std in [0.001, 1000000000]. Keyword svgd_spread=.
@@ -328,9 +302,8 @@ class UncertaintySettings:
     with independent residuals, as the peers report). Keyword temper=. Default True.
     """
     block_size: Distance
-    """Block side of the sandwich estimator that measures the correlation of residuals, a Distance
-    in [1e-06, 10] scaled units or [1e-06, 1000000] m. Keyword block_size=. Default
-    Distance.scaled(0.1).
+    """Block side of the sandwich estimator, a Distance in [1e-06, 10] scaled units or [1e-06,
+    1000000] m. A fixed rule. Default Distance.scaled(0.1).
     """
 
     def __init__(self) -> None: ...
@@ -349,15 +322,12 @@ class NeighborhoodSettings:
     1000]. Keyword neighbors=. Default 20.
     """
     flat_k: int
-    """Plane costs: neighbours of a point whose nearest ones already lie flat (surface variation at
-    most --flatness): those alone give its normal and covariance, the others' come from
-    --neighbors; 0 = always --neighbors, in [0, 1000]. Keyword flat_neighbors=. Default 10. (That
-    is Settings()'s; a NeighborhoodSettings() of its own has 0.)
+    """Neighbours of a point whose nearest ones already lie flat (surface variation at most
+    flatness): those alone give its normal and covariance; 0 = always k. Settings: 10,
+    BatchSettings: 0 (docs/preprocessing.md).
     """
     flatness: float
-    """Plane costs: the largest surface variation lambda_0 / (lambda_0 + lambda_1 + lambda_2) of a
-    flat neighbourhood (see --flat-neighbors), in [0, 0.333333]. Keyword flatness=. Default 0.05.
-    """
+    """The largest surface variation of a flat neighbourhood, in [0, 1/3]. Default 0.05."""
     num_threads: int
     """Worker threads of the estimation; 0 = all cores (the results are the same for any count).
     Default 0.
@@ -392,15 +362,9 @@ class Settings:
     """Mini-batch size m, source points per iteration, in [1, 10000000]. Keyword batch_size=.
     Default 160.
     """
-    cap_batch_to_source: bool
-    """Small sources: cap m at 2 x source points / window (at least 32) so that a convergence window
-    sees each point about twice (false: m always, the paper). Keyword cap_batch_to_source=.
-    Default True.
-    """
-    small_source_gauss_newton: bool
-    """Small sources (fewer than batch-size x window / 2 points): the coarse stage takes
-    Gauss-Newton steps while the optimizer is the default Adam (false: the optimizer always, the
-    paper). Keyword small_source_gauss_newton=. Default True.
+    adapt_small_sources: bool
+    """The small-source rules (Settings.paper(): False): a capped mini-batch and Gauss-Newton coarse
+    steps for sources of fewer than batch_size x window / 2 points.
     """
     max_correspondence_distance: Distance
     """Correspondence rejection distance d_max, a Distance in [1e-06, 10] scaled units or [1e-06,
@@ -463,8 +427,8 @@ class Settings:
     record_trace: bool
     """Record a per-iteration trace in the result. Keyword record_trace=. Default False."""
     robust_scaling: bool
-    """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
-    bounding box of every point). Keyword robust_scaling=. Default True.
+    """Scale from the bulk of each cloud, not hostage to a few far points (Settings.paper(): False,
+    the bounding box of every point). Default True.
     """
     num_threads: int
     """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
@@ -487,33 +451,25 @@ class Settings:
     def __init__(
         self,
         *,
+        max_distance: _DistanceValue = ...,
+        seed: int = ...,
+        threads: int = ...,
+        voxel_size: float = ...,
+        uncertainty: _UncertaintyName = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         batch_size: int = ...,
-        cap_batch_to_source: bool = ...,
-        small_source_gauss_newton: bool = ...,
-        max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
         max_iterations: int = ...,
-        seed: int = ...,
-        momentum: float = ...,
-        beta1: float = ...,
-        beta2: float = ...,
-        rms_decay: float = ...,
-        epsilon: float = ...,
-        hessian_decay: float = ...,
         damping: float = ...,
         window: int = ...,
         chi2: float = ...,
-        path_efficiency: float = ...,
         translation_tolerance: float = ...,
         rotation_tolerance: float = ...,
         refine_stages: int = ...,
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
-        refine_gauss_newton: bool = ...,
-        settle_tolerance: float = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         evaluation_points: int = ...,
@@ -523,24 +479,14 @@ class Settings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
-        threads: int = ...,
-        voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
-        uncertainty: _UncertaintyName = ...,
         uncertainty_samples: int = ...,
-        burn_in: int = ...,
         thinning: int = ...,
-        sgld_step: float = ...,
         particles: int = ...,
         svgd_iterations: int = ...,
-        svgd_step: float = ...,
         svgd_spread: float = ...,
         temper: bool = ...,
-        block_size: _DistanceValue = ...,
     ) -> None:
         """The default settings with the flat keyword overrides applied (see register())."""
 
@@ -548,32 +494,24 @@ class Settings:
     def paper(
         optimizer: _OptimizerName = "sgd",
         *,
+        max_distance: _DistanceValue = ...,
+        seed: int = ...,
+        threads: int = ...,
+        voxel_size: float = ...,
+        uncertainty: _UncertaintyName = ...,
         learning_rate: float = ...,
         batch_size: int = ...,
-        cap_batch_to_source: bool = ...,
-        small_source_gauss_newton: bool = ...,
-        max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
         max_iterations: int = ...,
-        seed: int = ...,
-        momentum: float = ...,
-        beta1: float = ...,
-        beta2: float = ...,
-        rms_decay: float = ...,
-        epsilon: float = ...,
-        hessian_decay: float = ...,
         damping: float = ...,
         window: int = ...,
         chi2: float = ...,
-        path_efficiency: float = ...,
         translation_tolerance: float = ...,
         rotation_tolerance: float = ...,
         refine_stages: int = ...,
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
-        refine_gauss_newton: bool = ...,
-        settle_tolerance: float = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         evaluation_points: int = ...,
@@ -583,24 +521,14 @@ class Settings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
-        threads: int = ...,
-        voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
-        uncertainty: _UncertaintyName = ...,
         uncertainty_samples: int = ...,
-        burn_in: int = ...,
         thinning: int = ...,
-        sgld_step: float = ...,
         particles: int = ...,
         svgd_iterations: int = ...,
-        svgd_step: float = ...,
         svgd_spread: float = ...,
         temper: bool = ...,
-        block_size: _DistanceValue = ...,
     ) -> Settings:
         """The paper's settings: m = 160, d_max = 0.5 scaled, fixed step alpha = 2 ('sgd') or Adam
         0.01 ('adam'), no refinement, the last iterate, the lower-corner scaling origin; then the
@@ -610,33 +538,25 @@ class Settings:
     def replace(
         self,
         *,
+        max_distance: _DistanceValue = ...,
+        seed: int = ...,
+        threads: int = ...,
+        voxel_size: float = ...,
+        uncertainty: _UncertaintyName = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         batch_size: int = ...,
-        cap_batch_to_source: bool = ...,
-        small_source_gauss_newton: bool = ...,
-        max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
         max_iterations: int = ...,
-        seed: int = ...,
-        momentum: float = ...,
-        beta1: float = ...,
-        beta2: float = ...,
-        rms_decay: float = ...,
-        epsilon: float = ...,
-        hessian_decay: float = ...,
         damping: float = ...,
         window: int = ...,
         chi2: float = ...,
-        path_efficiency: float = ...,
         translation_tolerance: float = ...,
         rotation_tolerance: float = ...,
         refine_stages: int = ...,
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
-        refine_gauss_newton: bool = ...,
-        settle_tolerance: float = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         evaluation_points: int = ...,
@@ -646,24 +566,14 @@ class Settings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
-        threads: int = ...,
-        voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
-        uncertainty: _UncertaintyName = ...,
         uncertainty_samples: int = ...,
-        burn_in: int = ...,
         thinning: int = ...,
-        sgld_step: float = ...,
         particles: int = ...,
         svgd_iterations: int = ...,
-        svgd_step: float = ...,
         svgd_spread: float = ...,
         temper: bool = ...,
-        block_size: _DistanceValue = ...,
     ) -> Settings:
         """A copy with the flat keyword overrides of register() applied."""
 
@@ -731,9 +641,7 @@ class BatchSettings:
     4294967295]. Keyword evaluation_points=. Default 2000.
     """
     robust_scaling: bool
-    """Scale from the bulk of each cloud, not hostage to a few far points (false: the paper's
-    bounding box of every point). Keyword robust_scaling=. Default True.
-    """
+    """Scale from the bulk of each cloud, not hostage to a few far points. Default True."""
     num_threads: int
     """Threads of one registration (its voxel grid passes, KD-tree build, for the SGD plane costs
     the grid's reference normals, the SGD mini-batches' queries and the final statistics' on a
@@ -769,12 +677,9 @@ class BatchSettings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
     ) -> None:
         """The default settings (point-to-point ICP) with the batch keyword overrides applied."""
@@ -794,12 +699,9 @@ class BatchSettings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
     ) -> BatchSettings:
         """Point-to-point ICP (Besl-McKay; closed-form SVD step), then the keyword overrides."""
@@ -819,12 +721,9 @@ class BatchSettings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
     ) -> BatchSettings:
         """Point-to-plane ICP (Chen-Medioni; Levenberg-Marquardt step), then the keyword overrides.
@@ -845,12 +744,9 @@ class BatchSettings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
     ) -> BatchSettings:
         """Plane-to-plane GICP (Segal et al.; Levenberg-Marquardt step), then the keyword overrides.
@@ -871,12 +767,9 @@ class BatchSettings:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
         threads: int = ...,
         voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
     ) -> BatchSettings:
         """A copy with the batch keyword overrides applied."""
@@ -936,33 +829,25 @@ class ReferenceIndex:
         *,
         method: _MethodName = "sgd",
         settings: Settings | BatchSettings | None = None,
+        max_distance: _DistanceValue = ...,
+        seed: int = ...,
+        threads: int = ...,
+        voxel_size: float = ...,
+        uncertainty: _UncertaintyName = ...,
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         batch_size: int = ...,
-        cap_batch_to_source: bool = ...,
-        small_source_gauss_newton: bool = ...,
-        max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
         max_iterations: int = ...,
-        seed: int = ...,
-        momentum: float = ...,
-        beta1: float = ...,
-        beta2: float = ...,
-        rms_decay: float = ...,
-        epsilon: float = ...,
-        hessian_decay: float = ...,
         damping: float = ...,
         window: int = ...,
         chi2: float = ...,
-        path_efficiency: float = ...,
         translation_tolerance: float = ...,
         rotation_tolerance: float = ...,
         refine_stages: int = ...,
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
-        refine_gauss_newton: bool = ...,
-        settle_tolerance: float = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         evaluation_points: int = ...,
@@ -972,24 +857,14 @@ class ReferenceIndex:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
-        threads: int = ...,
-        voxel_size: float = ...,
         downsample_to: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
-        uncertainty: _UncertaintyName = ...,
         uncertainty_samples: int = ...,
-        burn_in: int = ...,
         thinning: int = ...,
-        sgld_step: float = ...,
         particles: int = ...,
         svgd_iterations: int = ...,
-        svgd_step: float = ...,
         svgd_spread: float = ...,
         temper: bool = ...,
-        block_size: _DistanceValue = ...,
         global_feature_points: int = ...,
         global_normal_neighbors: int = ...,
         global_feature_radius: float = ...,
@@ -1269,33 +1144,25 @@ def register(
     settings: Settings | BatchSettings | None = None,
     method: _MethodName = "sgd",
     *,
+    max_distance: _DistanceValue = ...,
+    seed: int = ...,
+    threads: int = ...,
+    voxel_size: float = ...,
+    uncertainty: _UncertaintyName = ...,
     optimizer: _OptimizerName = ...,
     learning_rate: float = ...,
     batch_size: int = ...,
-    cap_batch_to_source: bool = ...,
-    small_source_gauss_newton: bool = ...,
-    max_distance: _DistanceValue = ...,
     max_distance_unit: _UnitName = ...,
     max_iterations: int = ...,
-    seed: int = ...,
-    momentum: float = ...,
-    beta1: float = ...,
-    beta2: float = ...,
-    rms_decay: float = ...,
-    epsilon: float = ...,
-    hessian_decay: float = ...,
     damping: float = ...,
     window: int = ...,
     chi2: float = ...,
-    path_efficiency: float = ...,
     translation_tolerance: float = ...,
     rotation_tolerance: float = ...,
     refine_stages: int = ...,
     step_decay: float = ...,
     distance_factor: float = ...,
     min_distance: _DistanceValue = ...,
-    refine_gauss_newton: bool = ...,
-    settle_tolerance: float = ...,
     average: bool = ...,
     scaling_origin: _OriginName = ...,
     evaluation_points: int = ...,
@@ -1305,24 +1172,14 @@ def register(
     kernel_scale: _DistanceValue = ...,
     trim: float = ...,
     neighbors: int = ...,
-    flat_neighbors: int = ...,
-    flatness: float = ...,
-    threads: int = ...,
-    voxel_size: float = ...,
     downsample_to: int = ...,
-    robust_scaling: bool = ...,
     record_trace: bool = ...,
-    uncertainty: _UncertaintyName = ...,
     uncertainty_samples: int = ...,
-    burn_in: int = ...,
     thinning: int = ...,
-    sgld_step: float = ...,
     particles: int = ...,
     svgd_iterations: int = ...,
-    svgd_step: float = ...,
     svgd_spread: float = ...,
     temper: bool = ...,
-    block_size: _DistanceValue = ...,
     global_feature_points: int = ...,
     global_normal_neighbors: int = ...,
     global_feature_radius: float = ...,
@@ -1373,9 +1230,11 @@ def register(
         plane-to-plane), both Levenberg-Marquardt. All but 'sgd' set the cost (cost= is then an
         error). An unknown name raises InvalidSettingsError.
     **overrides
-        Flat keyword settings applied on top of `settings`, named like the CLI's options (the
-        library's settings table), each with its default and valid range. A distance given as a
-        number
+        Keyword settings applied on top of `settings`, named like the CLI's options (the library's
+        settings table), each with its default and valid range. Most runs set one of the common
+        ones at most; the others are better kept together in `settings`
+        (settings=sgd_icp.Settings(refine_stages=2, trim=0.8)), which any number of calls share.
+        A distance given as a number
         is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
         optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
         For the batch methods (any other keyword raises TypeError):
@@ -1384,31 +1243,40 @@ def register(
         rotation_tolerance (1e-05, [0, 0.01]), evaluation_points (2000, [0, 4294967295]),
         cost (CostType.point_to_point), kernel (KernelType.none),
         kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        flat_neighbors (0, [0, 1000]), flatness (0.05, [0, 0.333333]), threads (1, [0, 1024]),
-        voxel_size (0.0, [0, 1000000]), downsample_to (0, [0, 4294967295]), robust_scaling (True),
+        threads (1, [0, 1024]), voxel_size (0.0, [0, 1000000]), downsample_to (0, [0, 4294967295]),
         record_trace (False).
         For the SGD methods:
-        optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
-        batch_size (160, [1, 10000000]), cap_batch_to_source (True),
-        small_source_gauss_newton (True), max_distance (Distance.scaled(0.5)),
-        max_iterations (4000, [1, 1000000000]), seed (2019, [0, 2^64-1]), momentum (0.9, [0, 1)),
-        beta1 (0.9, [0, 1)), beta2 (0.999, [0, 1)), rms_decay (0.9, [0, 1)),
-        epsilon (1e-08, (0, 1]), hessian_decay (0.9, [0, 1)), damping (0.001, [0, 100]),
-        window (20, [8, 100000]), chi2 (12.59, (0, 1000]), path_efficiency (0.5, (0, 1]),
-        translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]),
-        refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]), distance_factor (3.0, [1, 1000]),
-        min_distance (Distance.scaled(0.0001)), refine_gauss_newton (True),
-        settle_tolerance (0.05, [0, 0.99]), average (True), scaling_origin (ScalingOrigin.center),
-        evaluation_points (2000, [0, 4294967295]), cost (CostType.point_to_plane),
-        coarse_cost (CostType.point_to_point), kernel (KernelType.none),
-        kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]), neighbors (20, [3, 1000]),
-        flat_neighbors (10, [0, 1000]), flatness (0.05, [0, 0.333333]), threads (1, [0, 1024]),
-        voxel_size (0.0, [0, 1000000]), downsample_to (20000, [0, 4294967295]),
-        robust_scaling (True), record_trace (False), uncertainty (UncertaintyType.none),
-        uncertainty_samples (200, [2, 1000000]), burn_in (50, [0, 10000000]),
-        thinning (5, [1, 10000]), sgld_step (0.1, [0.0001, 1]), particles (32, [1, 10000]),
-        svgd_iterations (50, [1, 1000000]), svgd_step (0.05, [0.0001, 10]),
-        svgd_spread (3.0, [0.001, 1000000000]), temper (True), block_size (Distance.scaled(0.1)).
+        The common ones:
+          max_distance (Distance.scaled(0.5)), seed (2019, [0, 2^64-1]), threads (1, [0, 1024]),
+          voxel_size (0.0, [0, 1000000]), uncertainty (UncertaintyType.none).
+        The others, by the part of the run that reads them:
+        Step rule:
+          optimizer (OptimizerType.adam), learning_rate (0.01, [1e-06, 10000]),
+          damping (0.001, [0, 100]);
+        Sampling (the mini-batches):
+          batch_size (160, [1, 10000000]);
+        Registration run:
+          max_iterations (4000, [1, 1000000000]), average (True),
+          evaluation_points (2000, [0, 4294967295]), cost (CostType.point_to_plane),
+          coarse_cost (CostType.point_to_point), record_trace (False);
+        Convergence:
+          window (20, [8, 100000]), chi2 (12.59, (0, 1000]),
+          translation_tolerance (1e-06, [0, 0.01]), rotation_tolerance (1e-06, [0, 0.01]);
+        Refinement:
+          refine_stages (3, [0, 100]), step_decay (0.5, [0.01, 1]),
+          distance_factor (3.0, [1, 1000]), min_distance (Distance.scaled(0.0001));
+        Scaling:
+          scaling_origin (ScalingOrigin.center);
+        Pairs and robust costs:
+          kernel (KernelType.none), kernel_scale (Distance.scaled(0.01)), trim (1.0, [0.01, 1]);
+        Surfaces (normals, covariances):
+          neighbors (20, [3, 1000]);
+        Downsampling:
+          downsample_to (20000, [0, 4294967295]);
+        Uncertainty:
+          uncertainty_samples (200, [2, 1000000]), thinning (5, [1, 10000]),
+          particles (32, [1, 10000]), svgd_iterations (50, [1, 1000000]),
+          svgd_spread (3.0, [0.001, 1000000000]), temper (True).
         With init='global' (an error without it), the global estimate's settings, named like the
         CLI's --global-* options (docs/global.md):
         global_feature_points (3000, [10, 10000000]), global_normal_neighbors (12, [3, 1000]),
@@ -1418,7 +1286,7 @@ def register(
         global_distinct_translation (3.0, [0, 1000]), global_refined_hypotheses (3, [1, 1000]),
         global_fine_distance (0.5, (0, 1000]), global_ambiguity_ratio (0.9, (0, 1]),
         global_min_score (0.05, [0, 1]), global_min_points (30, [3, 10000000]).
-        See docs/python.md for the settings each one sets.
+        See docs/python-settings.md for the settings each one sets.
 
     The GIL is released during the registration (and the KD-tree build), so registrations in
     several Python threads run in parallel.
@@ -1790,8 +1658,12 @@ class Odometry:
         deskew: str = "auto",
         *,
         max_range: float = ...,
-        min_range: float = ...,
         voxel_size: float = ...,
+        max_distance: _DistanceValue = ...,
+        seed: int = ...,
+        threads: int = ...,
+        uncertainty: _UncertaintyName = ...,
+        min_range: float = ...,
         max_points_per_voxel: int = ...,
         initial_threshold: float = ...,
         min_motion: float = ...,
@@ -1800,30 +1672,17 @@ class Odometry:
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         batch_size: int = ...,
-        cap_batch_to_source: bool = ...,
-        small_source_gauss_newton: bool = ...,
-        max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
         max_iterations: int = ...,
-        seed: int = ...,
-        momentum: float = ...,
-        beta1: float = ...,
-        beta2: float = ...,
-        rms_decay: float = ...,
-        epsilon: float = ...,
-        hessian_decay: float = ...,
         damping: float = ...,
         window: int = ...,
         chi2: float = ...,
-        path_efficiency: float = ...,
         translation_tolerance: float = ...,
         rotation_tolerance: float = ...,
         refine_stages: int = ...,
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
-        refine_gauss_newton: bool = ...,
-        settle_tolerance: float = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         evaluation_points: int = ...,
@@ -1833,31 +1692,24 @@ class Odometry:
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
-        threads: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
-        uncertainty: _UncertaintyName = ...,
         uncertainty_samples: int = ...,
-        burn_in: int = ...,
         thinning: int = ...,
-        sgld_step: float = ...,
         particles: int = ...,
         svgd_iterations: int = ...,
-        svgd_step: float = ...,
         svgd_spread: float = ...,
         temper: bool = ...,
-        block_size: _DistanceValue = ...,
     ) -> None:
         """method: the registration step, a --method of the CLI (sgd, sgd-point, sgd-plane,
-        sgd-gicp, icp, icp-plane or gicp). Keywords: the odometry settings of `sgdicp odometry`
-        (max_range (100 m), min_range (0 m), voxel_size (0 m), max_points_per_voxel (20),
-        initial_threshold (0 m), min_motion (0 m), max_translation_per_frame (0 m),
-        max_rotation_per_frame (180 deg); 0 = derived from the data, docs/odometry.md) and the
-        keywords of register() for the method. max_distance= fixes d_max and turns the adaptive
-        threshold off. Raises TypeError for an unknown keyword, InvalidSettingsError for an
-        invalid value.
+        sgd-gicp, icp, icp-plane or gicp). settings: the registration's base settings, as
+        register()'s (a Settings, or a BatchSettings for a batch method; None = the defaults).
+        Keywords: the odometry settings of `sgdicp odometry` (max_range (100 m), min_range (0 m),
+        voxel_size (0 m), max_points_per_voxel (20), initial_threshold (0 m), min_motion (0 m),
+        max_translation_per_frame (0 m), max_rotation_per_frame (180 deg); 0 = derived from the
+        data, docs/odometry.md), deskew= ('auto', 'none', 'azimuth') and the keywords of
+        register() for the method; most runs set at most voxel_size=, max_range=, threads= and
+        uncertainty=. max_distance= fixes d_max and turns the adaptive threshold off. Raises
+        TypeError for an unknown keyword, InvalidSettingsError for an invalid value.
         """
     def register_frame(
         self, points: _Points, times: npt.ArrayLike | None = None
@@ -1865,8 +1717,8 @@ class Odometry:
         """Registers the next frame, an (N, 3) float32/float64 array in its sensor frame (metres),
         and returns its (4, 4) pose in the first frame's coordinates (the first frame: the
         identity). times: None, or each point's time (N,), seconds, any origin: the frame is then
-        deskewed (deskew='auto', docs/deskewing.md). A frame that fails (see last_report) gets the
-        predicted pose.
+        deskewed (deskew='auto', docs/deskewing.md). A frame that fails (see last_report) gets
+        the predicted pose.
         """
     def skip_frame(self, message: str) -> npt.NDArray[np.float64]:
         """Records a frame that could not be read: it gets the predicted pose and a failed report
@@ -1933,8 +1785,12 @@ class Localizer(Odometry):
         deskew: str = "auto",
         *,
         max_range: float = ...,
-        min_range: float = ...,
         voxel_size: float = ...,
+        max_distance: _DistanceValue = ...,
+        seed: int = ...,
+        threads: int = ...,
+        uncertainty: _UncertaintyName = ...,
+        min_range: float = ...,
         max_points_per_voxel: int = ...,
         initial_threshold: float = ...,
         min_motion: float = ...,
@@ -1943,30 +1799,17 @@ class Localizer(Odometry):
         optimizer: _OptimizerName = ...,
         learning_rate: float = ...,
         batch_size: int = ...,
-        cap_batch_to_source: bool = ...,
-        small_source_gauss_newton: bool = ...,
-        max_distance: _DistanceValue = ...,
         max_distance_unit: _UnitName = ...,
         max_iterations: int = ...,
-        seed: int = ...,
-        momentum: float = ...,
-        beta1: float = ...,
-        beta2: float = ...,
-        rms_decay: float = ...,
-        epsilon: float = ...,
-        hessian_decay: float = ...,
         damping: float = ...,
         window: int = ...,
         chi2: float = ...,
-        path_efficiency: float = ...,
         translation_tolerance: float = ...,
         rotation_tolerance: float = ...,
         refine_stages: int = ...,
         step_decay: float = ...,
         distance_factor: float = ...,
         min_distance: _DistanceValue = ...,
-        refine_gauss_newton: bool = ...,
-        settle_tolerance: float = ...,
         average: bool = ...,
         scaling_origin: _OriginName = ...,
         evaluation_points: int = ...,
@@ -1976,22 +1819,13 @@ class Localizer(Odometry):
         kernel_scale: _DistanceValue = ...,
         trim: float = ...,
         neighbors: int = ...,
-        flat_neighbors: int = ...,
-        flatness: float = ...,
-        threads: int = ...,
-        robust_scaling: bool = ...,
         record_trace: bool = ...,
-        uncertainty: _UncertaintyName = ...,
         uncertainty_samples: int = ...,
-        burn_in: int = ...,
         thinning: int = ...,
-        sgld_step: float = ...,
         particles: int = ...,
         svgd_iterations: int = ...,
-        svgd_step: float = ...,
         svgd_spread: float = ...,
         temper: bool = ...,
-        block_size: _DistanceValue = ...,
     ) -> None:
         """map: (N, 3) float32/float64 array of the map's points, metres. init: the first frame's
         (4, 4) pose in the map, or None (the global registration places it). method and the

@@ -90,7 +90,10 @@ std::string attribute_doc(const Setting<S>& s, const py::object& defaults) {
     case SettingKind::flag:
       break;
   }
-  return doc + ". Keyword " + keyword_of(s.name) + "=. Default " + python_literal(value) + ".";
+  // The fixed rules (sgd_fixed_rules_table) are named by their C++ member: no keyword sets them.
+  const bool keyword = s.name.find('.') == std::string_view::npos;
+  return doc + (keyword ? ". Keyword " + keyword_of(s.name) + "=" : std::string(". A fixed rule")) +
+         ". Default " + python_literal(value) + ".";
 }
 
 // Gives every attribute of the settings table its docstring from the table (settings.hpp).

@@ -179,7 +179,7 @@ double correlation_factor(const FullPass& f, double sigma2) {
 // the objective the run actually minimises. Where nearest neighbours change as the pose moves
 // (noisy points as dense as the noise, centroids of voxels that cut a noisy surface), it is far
 // flatter than the Gauss-Newton matrix of pairs held fixed, and the error of the optimum that
-// much larger (docs/uncertainty.md, *Curvature of the re-paired objective*).
+// much larger (docs/uncertainty.md, *The methods*: laplace).
 PoseMatrix secant_curvature(const UncertaintyProblem& p, const Blocks& blocks,
                             const PoseVector& theta, const PoseVector& steps) {
   PoseMatrix a;

@@ -109,3 +109,19 @@ def test_readme_python_example_runs_as_written(monkeypatch):
     namespace: dict = {}
     exec(compile(code, "README.md", "exec"), namespace)  # noqa: S102 - our own README
     assert namespace["r"].converged
+
+
+@pytest.mark.parametrize("command, solvers", [("register", ("sgd",)), ("odometry", ("odometry",))])
+def test_the_common_settings_are_the_ones_the_cli_help_shows(command, solvers):
+    """The table marks the settings a user sets (common): Python lists them first, and the CLI's
+    --help, which shows at most 15 options, shows every one of them."""
+    cli = find_cli()
+    if cli is None:
+        pytest.skip("sgdicp executable not found")
+    short = subprocess.run([str(cli), command, "--help"], capture_output=True, text=True,
+                           check=True, timeout=60).stdout
+    common = [k for solver in solvers for k, _, _, is_common in sgd_icp._core._settings_keywords(solver)
+              if is_common]
+    assert common
+    for keyword in common:
+        assert f"--{keyword.replace('_', '-')} " in short, f"{command} --help lacks {keyword}"

@@ -130,7 +130,7 @@ def test_global_keywords_need_init_global(scene):
 
 
 def test_global_keywords_are_the_cli_options_and_documented():
-    keywords = [k for k, _, _ in sgd_icp._core._settings_keywords("global")]
+    keywords = [k for k, *_ in sgd_icp._core._settings_keywords("global")]
     assert keywords[0] == "global_feature_points" and "global_min_points" in keywords
     doc = sgd_icp.register.__doc__
     assert "global_feature_points (3000, [10, 10000000])" in doc

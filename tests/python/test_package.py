@@ -162,8 +162,8 @@ class CoreWithANewSetting:
         return getattr(_core, name)
 
     @staticmethod
-    def _settings_keywords(solver: str) -> list[tuple[str, str, str | None]]:
-        extra = [("new_knob", "real", None)] if solver == "sgd" else []
+    def _settings_keywords(solver: str) -> list[tuple[str, str, str | None, bool]]:
+        extra = [("new_knob", "real", None, False)] if solver == "sgd" else []
         return _core._settings_keywords(solver) + extra
 
 

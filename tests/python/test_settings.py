@@ -295,7 +295,7 @@ def test_the_stub_lists_the_common_keywords_first():
     stub = (Path(sgd_icp.__file__).parent / "_core.pyi").read_text()
     register = stub[stub.index("def register("):]
     header = register[: register.index(") ->")]
-    names = [line.strip().split(":")[0] for line in header.splitlines()[1:]]
+    names = [line.strip().rstrip(",").split(":")[0] for line in header.splitlines()[1:]]
     star = names.index("*")
     assert names[star + 1: star + 6] == ["max_distance", "seed", "threads", "voxel_size",
                                          "uncertainty"], names[star:star + 8]
