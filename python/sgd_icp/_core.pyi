@@ -1231,11 +1231,10 @@ def register(
         error). An unknown name raises InvalidSettingsError.
     **overrides
         Keyword settings applied on top of `settings`, named like the CLI's options (the library's
-        settings table), each with its default and valid range. Most runs set one of the common
-        ones at most; the others are better kept together in `settings`
-        (settings=sgd_icp.Settings(refine_stages=2, trim=0.8)), which any number of calls share.
-        A distance given as a number
-        is in max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
+        settings table), each with its default and valid range. The common ones come first; the
+        others are better kept together in `settings`, which any number of calls can share
+        (settings=sgd_icp.Settings(refine_stages=2, trim=0.8)). A distance given as a number is in
+        max_distance_unit ('scaled', the default, or 'm'); a Distance keeps its own unit.
         optimizer= also sets learning_rate to that rule's own step unless learning_rate= is given.
         For the batch methods (any other keyword raises TypeError):
         max_distance (Distance.scaled(0.05)), max_iterations (100, [1, 1000000000]),
