@@ -3,6 +3,7 @@
 // most 15, one line each); --help-all lists every option, grouped by the part of the library
 // that reads it (docs/cli.md).
 #include <span>
+#include <string>
 #include <string_view>
 
 #include <CLI/CLI.hpp>
@@ -45,6 +46,11 @@ inline constexpr CommonOption kThreadsBrief{"threads",
                                             "Threads of each frame's registration, 0 = every core"};
 inline constexpr CommonOption kUncertaintyBrief{
     "uncertainty", "Each frame's covariance: none, laplace, sgld, svgd"};
+
+/// What an unknown option given to `app`'s subcommand may have meant, one line per option: a
+/// setting of an earlier release that is none now, or the command's nearest long option (at most
+/// 3 edits away); empty when there is no such option or no guess.
+std::string unknown_option_hints(const CLI::App& app);
 
 /// Lays out `command`'s help: with --help, the options in `common` under "Options" and the others
 /// hidden; with --help-all, every option with its whole help, in the group of the part that reads

@@ -22,6 +22,11 @@ int main(int argc, char** argv) {
   sgdicp::cli::add_localize_command(app);
   try {
     app.parse(argc, argv);
+  } catch (const CLI::ExtrasError& e) {
+    const int status = app.exit(e);
+    const std::string hints = sgdicp::cli::unknown_option_hints(app);
+    if (!hints.empty()) std::cerr << hints << '\n';
+    return status;
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const sgdicp::cli::ExitStatus& e) {

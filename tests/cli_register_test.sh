@@ -382,6 +382,7 @@ expect_error "register --uncertainty with a batch method" "--uncertainty laplace
   register "$MOVED" "$REF" --method icp --uncertainty laplace
 expect_error "register --thinning 0" "--thinning 0: must be in" register "$MOVED" "$REF" --thinning 0
 # A retired option is refused as unknown (docs/registration.md, *What is no longer a setting*).
-expect_error "register --sgld-step, no longer an option" "sgld-step" register "$MOVED" "$REF" --sgld-step 0.1
+expect_error "register --sgld-step, no longer an option" "--sgld-step is no longer an option" \
+  register "$MOVED" "$REF" --sgld-step 0.1
 
 done_testing

@@ -164,8 +164,13 @@ expect_error "--batch-size x --window too large" '--batch-size x --window' \
   register "$MOVED" "$REF" --batch-size 100000 --window 10000
 expect_error "--scaling-origin middle" '--scaling-origin: unknown scaling origin .middle.' \
   register "$MOVED" "$REF" --scaling-origin middle
-expect_error "--preconditioner, gone: one spelling, --optimizer gauss-newton" 'preconditioner' \
-  register "$MOVED" "$REF" --preconditioner gauss-newton
+expect_error "--preconditioner, gone: one spelling, --optimizer gauss-newton" \
+  '--preconditioner is no longer an option' register "$MOVED" "$REF" --preconditioner gauss-newton
+# A typo in an option: the nearest option of the command (a new user's first mistake).
+expect_error "--vox-size, a typo" '--vox-size: did you mean --voxel-size\?' \
+  register "$MOVED" "$REF" --vox-size 0.2
+expect_error "odometry --max-rnge, a typo" '--max-rnge: did you mean --max-range\?' \
+  odometry "$tmp" --poses-out "$tmp/p.txt" --max-rnge 50
 
 # Transform options name themselves in their errors.
 expect_error "--ground-truth with 5 numbers names --ground-truth" '^sgdicp: error: --ground-truth' \

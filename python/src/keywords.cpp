@@ -147,27 +147,6 @@ constexpr std::array<std::pair<std::string_view, std::string_view>, 13> kSuggest
     {"method", "cost"},
 }};
 
-// Keywords of earlier releases that are no setting now: fixed rules of the default, or set by
-// Settings.paper() alone (docs/registration.md, *Why each setting is there*).
-constexpr std::array<std::string_view, 18> kRetired{"momentum",
-                                                    "beta1",
-                                                    "beta2",
-                                                    "rms_decay",
-                                                    "epsilon",
-                                                    "hessian_decay",
-                                                    "path_efficiency",
-                                                    "refine_gauss_newton",
-                                                    "settle_tolerance",
-                                                    "flat_neighbors",
-                                                    "flatness",
-                                                    "robust_scaling",
-                                                    "cap_batch_to_source",
-                                                    "small_source_gauss_newton",
-                                                    "burn_in",
-                                                    "sgld_step",
-                                                    "svgd_step",
-                                                    "block_size"};
-
 template <typename S>
 std::string keyword_list(const std::vector<Setting<S>>& table) {
   std::string list = "max_distance_unit";
@@ -180,7 +159,7 @@ std::string keyword_list(const std::vector<Setting<S>>& table) {
   for (const auto& [alias, keyword] : kSuggestions) {
     if (name == alias) message += " (did you mean '" + std::string(keyword) + "'?)";
   }
-  if (std::find(kRetired.begin(), kRetired.end(), name) != kRetired.end()) {
+  if (is_retired_setting(name)) {
     message +=
         " (no longer a setting: a fixed rule of the default, or Settings.paper()'s; "
         "docs/registration.md)";

@@ -2,6 +2,8 @@
 // range, unit and help, which the CLI, Python and docs/registration.md read.
 #include "sgdicp/registration/settings.hpp"
 
+#include <algorithm>
+#include <array>
 #include <string_view>
 #include <vector>
 
@@ -385,6 +387,30 @@ const std::vector<Setting<SgdSettings>>& sgd_fixed_rules_table() {
 const std::vector<Setting<BatchSettings>>& batch_settings_table() {
   static const std::vector<Setting<BatchSettings>> table = make_batch_table();
   return table;
+}
+
+bool is_retired_setting(std::string_view name) {
+  static constexpr std::array<std::string_view, 19> kRetired{"momentum",
+                                                             "beta1",
+                                                             "beta2",
+                                                             "rms-decay",
+                                                             "epsilon",
+                                                             "hessian-decay",
+                                                             "path-efficiency",
+                                                             "refine-gauss-newton",
+                                                             "settle-tolerance",
+                                                             "flat-neighbors",
+                                                             "flatness",
+                                                             "robust-scaling",
+                                                             "cap-batch-to-source",
+                                                             "small-source-gauss-newton",
+                                                             "burn-in",
+                                                             "sgld-step",
+                                                             "svgd-step",
+                                                             "block-size",
+                                                             "preconditioner"};
+  return std::any_of(kRetired.begin(), kRetired.end(),
+                     [name](std::string_view r) { return detail::same_name(r, name); });
 }
 
 const Setting<SgdSettings>* find_sgd_setting(std::string_view name) {

@@ -315,6 +315,11 @@ struct Setting : SettingDescription {
 /// "optimizer.learning_rate"), the heading under which --help-all and Python's help group it.
 [[nodiscard]] std::string_view setting_part(std::string_view field);
 
+/// Whether `name` ('_' may stand for '-') was a setting of an earlier release that is none now: a
+/// rule's constant, a fixed rule or a paper()-only member (docs/registration.md, *What is no
+/// longer a setting*), so that the CLI and Python can say so instead of "unknown".
+[[nodiscard]] bool is_retired_setting(std::string_view name);
+
 /// The setting called `name` ('_' may stand for '-'), or nullptr.
 [[nodiscard]] const Setting<SgdSettings>* find_sgd_setting(std::string_view name);
 [[nodiscard]] const Setting<BatchSettings>* find_batch_setting(std::string_view name);
