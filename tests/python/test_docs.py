@@ -125,3 +125,31 @@ def test_the_common_settings_are_the_ones_the_cli_help_shows(command, solvers):
     assert common
     for keyword in common:
         assert f"--{keyword.replace('_', '-')} " in short, f"{command} --help lacks {keyword}"
+
+
+def test_readme_cli_lines_run_as_written(tmp_path):
+    """Every line of the README's "Use" block runs: the demo pair for SOURCE and REFERENCE, three
+    KITTI scans for the folders (the map of `odometry --map-out` localized in by `localize`)."""
+    cli = find_cli()
+    scans = sorted((shared_data_dir() / "kitti_odometry_seq00" / "velodyne").glob("*.bin"))[:3]
+    if cli is None or len(scans) < 3:
+        pytest.skip("sgdicp executable or the KITTI scans not found")
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for scan in scans:
+        (folder / scan.name).write_bytes(scan.read_bytes())
+    text = (REPO_ROOT / "README.md").read_text()
+    section = text[text.index("## Use"):]
+    block = re.search(r"```sh\n(.*?)```", section, re.S).group(1)
+    demo = REPO_ROOT / "data" / "demo"
+    lines = [line.split("  #")[0].strip() for line in block.splitlines() if line.strip()]
+    assert len(lines) >= 5
+    for line in lines:
+        command = (line.replace("build/sgdicp", str(cli))
+                   .replace("SOURCE", str(demo / "car_cloud401.csv"))
+                   .replace("REFERENCE", str(demo / "car_cloud400.csv"))
+                   .replace("FOLDER2", str(folder)).replace("FOLDER", str(folder))
+                   .replace("../shared/data", str(shared_data_dir())))
+        done = subprocess.run(["bash", "-c", command], cwd=tmp_path, capture_output=True,
+                              text=True, timeout=300)
+        assert done.returncode == 0, f"README: {line}\n{done.stderr[-2000:]}"
