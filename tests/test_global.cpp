@@ -28,9 +28,6 @@ namespace {
 
 using test::kDeg;
 
-#define SKIP_WITHOUT(path) \
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << (path)
-
 // A rotation of 60-180 deg about a random axis through `centre`, the protocol.
 Eigen::Matrix4d large_turn(std::mt19937_64& rng, const Eigen::Vector3d& centre) {
   Eigen::Vector3d axis(test::uniform(rng, -1, 1), test::uniform(rng, -1, 1),

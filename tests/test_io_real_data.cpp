@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "io_support.hpp"
+#include "test_support.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/io.hpp"
 
@@ -28,12 +29,9 @@ fs::path shared(const std::string& relative) {
   return kSharedData / relative;
 }
 
-#define SKIP_IF_MISSING(path) \
-  if (!fs::exists(path)) GTEST_SKIP() << "missing " << (path)
-
 TEST(IoRealData, KinectBinaryCompressedPcdMatchesF32) {
   const fs::path folder = shared("pcl_kinect_frames");
-  SKIP_IF_MISSING(folder);
+  SKIP_WITHOUT(folder);
   int checked = 0;
   for (const auto& entry : fs::directory_iterator(folder)) {
     if (entry.path().extension() != ".pcd") continue;
@@ -61,7 +59,7 @@ TEST(IoRealData, KinectBinaryCompressedPcdMatchesF32) {
 }
 
 TEST(IoRealData, BunnyAsciiPcd) {
-  SKIP_IF_MISSING(shared("pcl_bunny/bun0.pcd"));
+  SKIP_WITHOUT(shared("pcl_bunny/bun0.pcd"));
   const ReadResult bun0 = read_point_cloud(shared("pcl_bunny/bun0.pcd"));
   const ReadResult bun4 = read_point_cloud(shared("pcl_bunny/bun4.pcd"));
   const ReadResult bunny = read_point_cloud(shared("pcl_bunny/bunny.pcd"));
@@ -78,7 +76,7 @@ TEST(IoRealData, BunnyAsciiPcd) {
 }
 
 TEST(IoRealData, LibpointmatcherCsvAndVtk) {
-  SKIP_IF_MISSING(shared("libpointmatcher_car/car_cloud400.csv"));
+  SKIP_WITHOUT(shared("libpointmatcher_car/car_cloud400.csv"));
   const ReadResult c400 = read_point_cloud(shared("libpointmatcher_car/car_cloud400.csv"));
   const ReadResult c401 = read_point_cloud(shared("libpointmatcher_car/car_cloud401.csv"));
   EXPECT_EQ(c400.cloud.size(), 24989u);
@@ -101,7 +99,7 @@ TEST(IoRealData, LibpointmatcherCsvAndVtk) {
 
 TEST(IoRealData, KittiBin) {
   const fs::path folder = shared("kitti_odometry_seq00/velodyne");
-  SKIP_IF_MISSING(folder);
+  SKIP_WITHOUT(folder);
   int checked = 0;
   for (const auto& entry : fs::directory_iterator(folder)) {
     if (entry.path().extension() != ".bin") continue;
@@ -118,7 +116,7 @@ TEST(IoRealData, KittiBin) {
 TEST(IoRealData, EthKinectMapPly) {
   const fs::path path =
       shared("eth_kinect_highcomplexity_map/high-complexity-environment_map_ascii.ply");
-  SKIP_IF_MISSING(path);
+  SKIP_WITHOUT(path);
   const ReadResult r = read_point_cloud(path);
   EXPECT_EQ(r.format, FileFormat::ply);
   EXPECT_EQ(r.cloud.size(), 38144u);
@@ -130,7 +128,7 @@ TEST(IoRealData, EthKinectMapPly) {
 
 TEST(IoRealData, GeneratedCopies) {
   const fs::path eth = shared("generated/eth_kinect_map_copies");
-  SKIP_IF_MISSING(eth);
+  SKIP_WITHOUT(eth);
   for (const auto& entry : fs::directory_iterator(eth)) {
     if (entry.path().extension() != ".pcd") continue;
     EXPECT_EQ(read_point_cloud(entry.path()).cloud.size(), 38144u) << entry.path();
@@ -145,7 +143,7 @@ TEST(IoRealData, GeneratedCopies) {
 // Whatever was read can be written and read back unchanged.
 TEST_F(IoTest, RealDataSurvivesARoundTrip) {
   const fs::path path = shared("pcl_bunny/bun0.pcd");
-  SKIP_IF_MISSING(path);
+  SKIP_WITHOUT(path);
   const ReadResult r = read_point_cloud(path);
   for (const char* name : {"bun0.ply", "bun0.pcd", "bun0.xyz"}) {
     write_point_cloud(dir_ / name, r.cloud);

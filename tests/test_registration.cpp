@@ -23,9 +23,6 @@ using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
 
-#define SKIP_WITHOUT(path) \
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << (path)
-
 // ---------------------------------------------------------------------------------------------
 // Synthetic: the reference is an independent sampling of the same scene moved by T_gt, so T_gt
 // is exact but no point has an exact twin: with samples ~4 cm apart, nearest-neighbour

@@ -73,6 +73,11 @@ inline std::filesystem::path shared_data(const std::string& relative) {
 }
 #endif
 
+// Skips the test when a file or folder of the data it reads is missing (../shared/data is not
+// part of the repository).
+#define SKIP_WITHOUT(path) \
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << (path)
+
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // A small man-made scene without symmetries: a floor, two walls, a box and a ball, 60k points

@@ -193,19 +193,25 @@ PoseMatrix secant_curvature(const UncertaintyProblem& p, const Blocks& blocks,
   return 0.5 * (a + a.transpose());
 }
 
-// `a` with its eigenvalues in the metric of `metric` (the Gauss-Newton matrix of the pairs held
-// fixed) kept within [kMinSoftening, 1]: re-pairing softens that curvature, it does not stiffen
-// it; a secant across a few pairing jumps can come out flat, crooked or not positive.
-PoseMatrix bounded_curvature(const PoseMatrix& a, const PoseMatrix& metric) {
+// The softening that re-pairing brings to `metric` (the Gauss-Newton matrix of the pairs held
+// fixed), measured by the secant `a`: one factor for every direction, the geometric mean of a's
+// eigenvalues in that metric, each kept within [kMinSoftening, 1] (re-pairing softens that
+// curvature, it does not stiffen it). The secant of one problem's re-paired gradient crosses a
+// few pairing jumps per step, so its eigenvalues scatter (0.02-0.72 within one car scan) and the
+// inverse of a scattered curvature is biased wide, most of all in the direction measured
+// softest: per direction, the car's variance came out 4-6x the errors', one factor 0.8-2.7x
+// (docs/uncertainty.md, *Calibration*).
+PoseMatrix softened_curvature(const PoseMatrix& a, const PoseMatrix& metric) {
   const Eigen::LLT<PoseMatrix> llt(metric);
   const PoseMatrix l = llt.matrixL();
   const PoseMatrix l_inverse = l.inverse();
   PoseMatrix m = l_inverse * a * l_inverse.transpose();
   m = 0.5 * (m + m.transpose()).eval();
-  const Eigen::SelfAdjointEigenSolver<PoseMatrix> eigen(m);
-  const PoseVector w = eigen.eigenvalues().cwiseMax(kMinSoftening).cwiseMin(1.0);
-  return l * eigen.eigenvectors() * w.asDiagonal() * eigen.eigenvectors().transpose() *
-         l.transpose();
+  const PoseVector w = Eigen::SelfAdjointEigenSolver<PoseMatrix>(m, Eigen::EigenvaluesOnly)
+                           .eigenvalues()
+                           .cwiseMax(kMinSoftening)
+                           .cwiseMin(1.0);
+  return std::exp(w.array().log().mean()) * metric;
 }
 
 // The block sandwich of the run's own estimating equation G(theta) = 0: A^-1 S A^-1, A the
@@ -248,7 +254,8 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   const PoseMatrix prior = (sigma2 * prior_information()).asDiagonal();
   FullPass own = uses_surface_information(p) ? full_pass(p, blocks, theta, false) : full;
   const PoseVector steps = secant_steps(kSecantFirstStep * laplace.diagonal().cwiseSqrt(), p);
-  const PoseMatrix a = bounded_curvature(secant_curvature(p, blocks, theta, steps), metric) + prior;
+  const PoseMatrix a =
+      softened_curvature(secant_curvature(p, blocks, theta, steps), metric) + prior;
   const PoseMatrix a_inverse = a.inverse();
   PoseMatrix cov = sandwich_of(a_inverse, own, sigma2);
   // Newton's step on G, within the box the secant probed (a flat secant would send it far off

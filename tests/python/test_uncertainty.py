@@ -212,8 +212,13 @@ def test_svgd_finds_the_modes_of_a_symmetric_box_where_laplace_has_one_gaussian(
               particles=64)
     laplace = sgd_icp.register(src.astype(np.float32), index, uncertainty="laplace", **kw)
     assert laplace.modes == []
+    # svgd_spread counts the tempered fixed-pair Laplace's standard deviations (kappa times the
+    # untempered covariance), not the sandwich's: 1.5 rad of yaw in that unit.
+    naive = sgd_icp.register(src.astype(np.float32), index, uncertainty="laplace", temper=False,
+                             **kw)
+    yaw_std = np.sqrt(naive.covariance[5, 5] * laplace.correlation_factor)
     r = sgd_icp.register(src.astype(np.float32), index, uncertainty="svgd",
-                         svgd_spread=1.5 / np.sqrt(laplace.covariance[5, 5]), **kw)
+                         svgd_spread=1.5 / yaw_std, **kw)
     assert len(r.modes) >= 2
 
     def weight_near(pose):
