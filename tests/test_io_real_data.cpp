@@ -13,9 +13,9 @@
 #include <gtest/gtest.h>
 
 #include "io_support.hpp"
-#include "test_support.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/io.hpp"
+#include "test_support.hpp"
 
 namespace sgdicp::io_test {
 namespace {
