@@ -7,6 +7,7 @@
 #include <optional>
 #include <random>
 #include <tuple>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -16,6 +17,7 @@
 #include "sgdicp/solver/optimizer.hpp"
 #include "sgdicp/solver/sampler.hpp"
 #include "surfaces/point_surfaces.hpp"
+#include "uncertainty/stein.hpp"
 #include "util/stopwatch.hpp"
 
 namespace sgdicp {
@@ -194,24 +196,43 @@ PoseMatrix secant_curvature(const UncertaintyProblem& p, const Blocks& blocks,
 }
 
 // The softening that re-pairing brings to `metric` (the Gauss-Newton matrix of the pairs held
-// fixed), measured by the secant `a`: one factor for every direction, the geometric mean of a's
-// eigenvalues in that metric, each kept within [kMinSoftening, 1] (re-pairing softens that
-// curvature, it does not stiffen it). The secant of one problem's re-paired gradient crosses a
-// few pairing jumps per step, so its eigenvalues scatter (0.02-0.72 within one car scan) and the
-// inverse of a scattered curvature is biased wide, most of all in the direction measured
-// softest: per direction, the car's variance came out 4-6x the errors', one factor 0.8-2.7x
-// (docs/uncertainty.md, *Calibration*).
-PoseMatrix softened_curvature(const PoseMatrix& a, const PoseMatrix& metric) {
-  const Eigen::LLT<PoseMatrix> llt(metric);
-  const PoseMatrix l = llt.matrixL();
+// fixed, plus the prior), measured by the secant `a`: one factor for every direction the data
+// constrain (where the pairs' information `jtj` outweighs the prior in the metric), the geometric
+// mean of a's eigenvalues there in that metric, each kept within [kMinSoftening, 1] (re-pairing
+// softens that curvature, it does not stiffen it). The secant of one problem's re-paired
+// gradient crosses a few pairing jumps per step, so its eigenvalues scatter (0.02-0.72 within
+// one car scan) and the inverse of a scattered curvature is biased wide, most of all in the
+// direction measured softest: per direction, the car's variance came out 4-6x the errors', one
+// factor 0.8-2.7x (docs/uncertainty.md, *Calibration*). Along a direction the data leave free
+// (a plane's slide) the secant measures nothing but noise, and the metric there is the prior's.
+PoseMatrix softened_curvature(const PoseMatrix& a, const PoseMatrix& metric,
+                              const PoseMatrix& jtj) {
+  const PoseMatrix l = Eigen::LLT<PoseMatrix>(metric).matrixL();
   const PoseMatrix l_inverse = l.inverse();
-  PoseMatrix m = l_inverse * a * l_inverse.transpose();
-  m = 0.5 * (m + m.transpose()).eval();
-  const PoseVector w = Eigen::SelfAdjointEigenSolver<PoseMatrix>(m, Eigen::EigenvaluesOnly)
-                           .eigenvalues()
-                           .cwiseMax(kMinSoftening)
-                           .cwiseMin(1.0);
-  return std::exp(w.array().log().mean()) * metric;
+  const auto normalized = [&](const PoseMatrix& x) {
+    const PoseMatrix y = l_inverse * x * l_inverse.transpose();
+    return PoseMatrix(0.5 * (y + y.transpose()));
+  };
+  // The directions where the pairs' share of the metric exceeds a half.
+  const Eigen::SelfAdjointEigenSolver<PoseMatrix> share(normalized(jtj));
+  std::vector<int> held;
+  for (int k = 0; k < 6; ++k) {
+    if (share.eigenvalues()[k] > 0.5) held.push_back(k);
+  }
+  if (held.empty()) return metric;
+  Eigen::MatrixXd u(6, static_cast<Eigen::Index>(held.size()));
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    u.col(static_cast<Eigen::Index>(k)) = share.eigenvectors().col(held[k]);
+  }
+  const Eigen::MatrixXd m = u.transpose() * normalized(a) * u;
+  const Eigen::VectorXd w =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(m, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .cwiseMax(kMinSoftening)
+          .cwiseMin(1.0);
+  const double softening = std::exp(w.array().log().mean());
+  const PoseMatrix within = PoseMatrix::Identity() + (softening - 1.0) * u * u.transpose();
+  return l * within * l.transpose();
 }
 
 // The block sandwich of the run's own estimating equation G(theta) = 0: A^-1 S A^-1, A the
@@ -219,8 +240,12 @@ PoseMatrix softened_curvature(const PoseMatrix& a, const PoseMatrix& metric) {
 // independent-residual sigma^2 H when there are too few blocks to measure it).
 PoseMatrix sandwich_of(const PoseMatrix& a_inverse, const FullPass& own, double sigma2) {
   const auto b = static_cast<double>(own.paired_blocks);
-  const PoseMatrix meat =
+  PoseMatrix meat =
       b > 6.0 ? PoseMatrix(own.blocks * (b / (b - 6.0))) : PoseMatrix(sigma2 * own.jtj);
+  // The prior's own share, as a pseudo-observation with A's prior information: it bounds a
+  // direction the data leave free (a plane's slide, where every pair's gradient is zero and the
+  // meat alone would say "no error at all"); elsewhere it is negligible.
+  meat.diagonal() += sigma2 * sigma2 * prior_information();
   PoseMatrix cov = a_inverse * meat * a_inverse.transpose();
   return 0.5 * (cov + cov.transpose());
 }
@@ -255,7 +280,7 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   FullPass own = uses_surface_information(p) ? full_pass(p, blocks, theta, false) : full;
   const PoseVector steps = secant_steps(kSecantFirstStep * laplace.diagonal().cwiseSqrt(), p);
   const PoseMatrix a =
-      softened_curvature(secant_curvature(p, blocks, theta, steps), metric) + prior;
+      softened_curvature(secant_curvature(p, blocks, theta, steps), metric, full.jtj) + prior;
   const PoseMatrix a_inverse = a.inverse();
   PoseMatrix cov = sandwich_of(a_inverse, own, sigma2);
   // Newton's step on G, within the box the secant probed (a flat secant would send it far off
@@ -449,47 +474,6 @@ std::vector<PoseVector> sgld_chain(const UncertaintyProblem& p, const Uncertaint
   return samples;
 }
 
-// The RBF bandwidth of the median heuristic (Liu and Wang 2016, section 5): h = med^2 /
-// log(K + 1), med the median pairwise distance, so that a particle's own term weighs about as
-// much as all the others together.
-double median_bandwidth(const std::vector<PoseVector>& z) {
-  std::vector<double> pairs;
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    for (std::size_t j = i + 1; j < z.size(); ++j) pairs.push_back((z[i] - z[j]).squaredNorm());
-  }
-  if (pairs.empty()) return 1.0;  // one particle: any bandwidth gives k = 1
-  const auto mid = pairs.begin() + static_cast<std::ptrdiff_t>(pairs.size() / 2);
-  std::nth_element(pairs.begin(), mid, pairs.end());
-  return *mid > 0.0 ? *mid / std::log(static_cast<double>(z.size()) + 1.0) : 1.0;
-}
-
-// Particles closer than this belong to one mode (kModeLinkDistance, kModeLinkBandwidth), given
-// the median heuristic's bandwidth of the particles.
-double mode_link(double median_h) {
-  return std::max(kModeLinkDistance, kModeLinkBandwidth * std::sqrt(median_h));
-}
-
-// The Stein direction of every particle (Liu and Wang 2016, eq. 8): the kernel-weighted mean of
-// the particles' descent directions plus the kernel's gradient, which repels them from each
-// other. While the particles form one mode the bandwidth is the median heuristic's times
-// kSvgdBandwidthScale (its measurement in uncertainty.hpp); over several modes the median is
-// set by the distances between them, and a wider kernel would merge them.
-std::vector<PoseVector> stein_direction(const std::vector<PoseVector>& z,
-                                        const std::vector<PoseVector>& grads) {
-  const double median = median_bandwidth(z);
-  const bool one_mode = particle_modes(z, mode_link(median)).size() == 1;
-  const double h = one_mode ? kSvgdBandwidthScale * median : median;
-  std::vector<PoseVector> phi(z.size(), PoseVector::Zero());
-  for (std::size_t i = 0; i < z.size(); ++i) {
-    for (std::size_t j = 0; j < z.size(); ++j) {
-      const double k = std::exp(-(z[i] - z[j]).squaredNorm() / h);
-      phi[i] += k * (-grads[j]) + (2.0 * k / h) * (z[i] - z[j]);
-    }
-    phi[i] /= static_cast<double>(z.size());
-  }
-  return phi;
-}
-
 // Stein ICP (Maken et al. 2022) in the whitened space, where the kernel's distances are taken.
 // The particles start at N(0, spread^2 I), the Laplace covariance inflated by spread^2. Returns z.
 std::vector<PoseVector> svgd_particles(const UncertaintyProblem& p, const UncertaintySettings& s,
@@ -555,7 +539,7 @@ void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVect
   fill_from_samples(p, thetas, reported_hat, result);
   result.modes.clear();
   // Particles the kernel cannot tell apart (k > 0.94) share their gradients and move as one.
-  for (const auto& members : particle_modes(z, mode_link(median_bandwidth(z)))) {
+  for (const auto& members : particle_modes(z, detail::particle_link(z))) {
     std::vector<PoseVector> poses;
     for (const std::size_t i : members) poses.push_back(result.samples[i]);
     const Moments m = moments_of(poses, poses.front());
@@ -566,54 +550,6 @@ void fill_from_particles(const UncertaintyProblem& p, const std::vector<PoseVect
 }
 
 }  // namespace
-
-std::vector<PoseVector> stein_descent(std::vector<PoseVector> z,
-                                      const ParticleGradients& energy_gradients,
-                                      std::size_t iterations, double step_first, double step_last) {
-  OptimizerSettings adam;
-  adam.type = OptimizerType::adam;
-  adam.learning_rate = 1.0;  // the schedule's step is the multiplier
-  std::vector<Optimizer> optimizers(z.size(), Optimizer(adam));
-  std::vector<PoseVector> grads(z.size(), PoseVector::Zero());
-  const double last = static_cast<double>(std::max<std::size_t>(iterations, 2) - 1);
-  for (std::size_t it = 0; it < iterations; ++it) {
-    const double step =
-        step_first * std::pow(step_last / step_first, static_cast<double>(it) / last);
-    energy_gradients(z, grads);
-    const std::vector<PoseVector> phi = stein_direction(z, grads);
-    // Adam minimises along its argument: -phi ascends the Stein direction.
-    for (std::size_t i = 0; i < z.size(); ++i) {
-      z[i] += optimizers[i].step(-phi[i], PoseMatrix::Zero(), step);
-    }
-  }
-  return z;
-}
-
-std::vector<std::vector<std::size_t>> particle_modes(const std::vector<PoseVector>& z,
-                                                     double link) {
-  const std::size_t n = z.size();
-  std::vector<bool> taken(n, false);
-  std::vector<std::vector<std::size_t>> modes;
-  for (std::size_t first = 0; first < n; ++first) {
-    if (taken[first]) continue;
-    taken[first] = true;
-    std::vector<std::size_t> mode{first};
-    // Breadth-first over the particles within `link` of a member.
-    for (std::size_t q = 0; q < mode.size(); ++q) {
-      for (std::size_t j = 0; j < n; ++j) {
-        if (!taken[j] && (z[mode[q]] - z[j]).norm() < link) {
-          taken[j] = true;
-          mode.push_back(j);
-        }
-      }
-    }
-    std::sort(mode.begin(), mode.end());
-    modes.push_back(std::move(mode));
-  }
-  std::stable_sort(modes.begin(), modes.end(),
-                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
-  return modes;
-}
 
 PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySettings& s,
                                 PoseVector theta_hat, RegistrationResult& result) {
