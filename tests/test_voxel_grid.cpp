@@ -150,9 +150,9 @@ double size_counted_by_thinning(const PointCloud& cloud, std::size_t target_poin
 
 // The size search counts in bitmaps (or a hash table where the bitmap would be too large): the
 // same counts, so the same steps and size as counting the thinning's voxels, on surfaces,
-// volumes and lines, a dense cluster in a sparse spread, a far point that makes the bitmap too
-// large, and on one or two threads (whose table of the size found is the thinning's).
-TEST(VoxelSizeForCount, CountsInBitmapsAsTheThinningKeepsVoxels) {
+// volumes and lines, a dense cluster in a sparse spread, and a far point that makes the bitmap
+// too large; and the tables ranked in bitmaps on one thread are those hashed on two.
+TEST(VoxelSizeForCount, BitmapsCountAndNumberVoxelsAsTheHashTableDoes) {
   std::vector<PointCloud> clouds;
   for (int kind = 0; kind < 3; ++kind) clouds.push_back(surface_volume_or_line(kind));
   PointCloud mixed = synthetic_scene(5, 50000);
@@ -167,14 +167,25 @@ TEST(VoxelSizeForCount, CountsInBitmapsAsTheThinningKeepsVoxels) {
     for (const std::size_t target : {500U, 5000U, 20000U}) {
       const double expected = size_counted_by_thinning(clouds[c], target);
       EXPECT_EQ(voxel_size_for_count(clouds[c], target), expected) << c << " " << target;
-      for (const std::size_t threads : {1U, 2U}) {
-        std::optional<detail::VoxelTable<detail::Counted>> settled;
-        EXPECT_EQ(detail::grid_size(clouds[c], 0.0, target, threads, &settled), expected);
-        if (settled) {
-          EXPECT_EQ(settled->keys.size(), voxel_downsample(clouds[c], expected).size());
-          EXPECT_EQ(settled->point_slots.size(), clouds[c].size());
-        }
+      // One thread ranks the table of the size found in a bitmap, two hash it: the same voxels
+      // in the same order, and the same slot for every point.
+      std::optional<detail::VoxelTable<detail::Counted>> ranked;
+      std::optional<detail::VoxelTable<detail::Counted>> hashed;
+      EXPECT_EQ(detail::grid_size(clouds[c], 0.0, target, 1, &ranked), expected);
+      EXPECT_EQ(detail::grid_size(clouds[c], 0.0, target, 2, &hashed), expected);
+      ASSERT_EQ(ranked.has_value(), hashed.has_value());
+      if (ranked) {
+        EXPECT_EQ(ranked->keys.size(), voxel_downsample(clouds[c], expected).size());
+        EXPECT_TRUE(std::equal(ranked->keys.begin(), ranked->keys.end(), hashed->keys.begin(),
+                               hashed->keys.end()));
+        EXPECT_TRUE(std::equal(ranked->point_slots.begin(), ranked->point_slots.end(),
+                               hashed->point_slots.begin(), hashed->point_slots.end()));
+        EXPECT_EQ(ranked->point_slots.size(), clouds[c].size());
       }
+      // voxel_downsample ranks its table too: the same centroids on one and two threads.
+      const PointCloud one = voxel_downsample(clouds[c], expected, 1);
+      const PointCloud two = voxel_downsample(clouds[c], expected, 2);
+      EXPECT_EQ(one.points, two.points);
     }
   }
 }
@@ -340,8 +351,9 @@ void expect_block_covariances(const PointCloud& cloud, double voxel, std::size_t
 
 // No block misses a neighbour or counts one twice: on layers with holes (so that the sweep over
 // the sorted voxels meets columns with missing voxels, empty columns and negative indices), on
-// the radix-sorted path and, with a second layer 20 km away (index spans of 22 bits per axis,
-// too wide for one word with the slot), on the compared path.
+// the radix-sorted path with the sweep's packed keys and, with a second layer 20 km away (index
+// spans of 22 bits per axis, too wide for one word with the slot or with the sweep's spare
+// bits), on the compared path with the keys as they are.
 TEST(VoxelSurfaces, EveryBlockHoldsExactlyItsPointsNeighbourhood) {
   expect_block_covariances(holey_layer(Eigen::Vector3d::Zero(), 0.1, 12000, 5), 0.1, 7);
   const double voxel = 0.005;

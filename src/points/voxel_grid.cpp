@@ -187,6 +187,179 @@ VoxelTable<Voxel> accumulate_counted(const PointCloud& cloud, VoxelTable<Counted
   return {std::move(counted.slots), std::move(counted.keys), std::move(sums.front()), {}};
 }
 
+// The size search's counts need no voxel's slot, key or first-seen order, only how many: a
+// bitmap over the box of voxels that the cloud spans, one bit a voxel, when it is small enough
+// to clear (at most kBitmapBitsPerPoint bits per point, within [2^23, 2^28] bits). A bit is one
+// load and store where the hash table's voxel is a 32-byte entry found by probing: a KITTI
+// scan's counting passes 1.1-2.2 -> 0.5-0.9 ms.
+constexpr double kBitmapBitsPerPoint = 128.0;
+constexpr double kMinBitmapBits = 0x1p23;
+constexpr double kMaxBitmapBits = 0x1p28;
+
+// Points per block of set_voxel_bits: their indices (3 int32 each) stay in the L1 cache.
+constexpr std::size_t kBitmapBlock = 256;
+
+// The box of voxels that a cloud spans on a grid, for bitmaps of one bit a voxel: the lowest
+// voxel and the spans along x and y, the bits (voxels) and 64-bit words.
+struct BitmapBox {
+  std::array<std::int32_t, 3> low{};
+  std::uint64_t nx = 0;
+  std::uint64_t ny = 0;
+  std::size_t words = 0;
+};
+
+// The box of `grid`'s voxels that `box` (the cloud's exact bounding box) spans, or nullopt when
+// it has more voxels than a bitmap may clear or its indices exceed int32.
+std::optional<BitmapBox> bitmap_box(const PointCloud& cloud, const VoxelGrid& grid,
+                                    const BoundingBox& box) {
+  const double largest = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
+  if (!(largest * grid.inverse_size() < 0x1p30)) return std::nullopt;
+  const VoxelKey low = grid.key(box.min.cast<float>());
+  const VoxelKey high = grid.key(box.max.cast<float>());
+  const double nx = static_cast<double>(high.x - low.x) + 1.0;
+  const double ny = static_cast<double>(high.y - low.y) + 1.0;
+  const double nz = static_cast<double>(high.z - low.z) + 1.0;
+  const double budget = std::clamp(kBitmapBitsPerPoint * static_cast<double>(cloud.size()),
+                                   kMinBitmapBits, kMaxBitmapBits);
+  if (!(nx * ny * nz <= budget)) return std::nullopt;
+  return BitmapBox{{static_cast<std::int32_t>(low.x), static_cast<std::int32_t>(low.y),
+                    static_cast<std::int32_t>(low.z)},
+                   static_cast<std::uint64_t>(nx),
+                   static_cast<std::uint64_t>(ny),
+                   static_cast<std::size_t>(nx * ny * nz) / 64 + 1};
+}
+
+// The number of occupied voxels of `grid` among the points of `range`, counted in `bits` (all
+// clear, one bit per voxel of `box`): the bits it sets. With `bit_of_point`, each point's bit
+// (below 2^28: kMaxBitmapBits) goes to bit_of_point[i]. The indices of a block of points are
+// made first in one loop over their coordinates, in int32 lanes the compiler vectorises, then
+// the bits.
+std::size_t set_voxel_bits(const PointCloud& cloud, const VoxelGrid& grid, PointRange range,
+                           const BitmapBox& box, RecycledVector<std::uint64_t>& bits,
+                           std::uint32_t* bit_of_point = nullptr) {
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  std::array<std::int32_t, 3 * kBitmapBlock> indices{};
+  std::size_t count = 0;
+  for (std::size_t first = range.begin; first < range.end; first += kBitmapBlock) {
+    const std::size_t points = std::min(kBitmapBlock, range.end - first);
+    const float* coordinates = cloud.points[first].data();
+    for (std::size_t k = 0; k < 3 * points; ++k) {
+      indices[k] = grid.index<std::int32_t>(coordinates[k]);
+    }
+    for (std::size_t j = 0; j < points; ++j) {
+      const auto along = [&](std::size_t axis) {
+        return static_cast<std::uint64_t>(
+            static_cast<std::uint32_t>(indices[3 * j + axis] - box.low[axis]));
+      };
+      const std::uint64_t bit = along(0) + box.nx * (along(1) + box.ny * along(2));
+      std::uint64_t& word = bits[bit >> 6];
+      const std::uint64_t mask = std::uint64_t{1} << (bit & 63);
+      count += (word & mask) == 0 ? 1 : 0;
+      word |= mask;
+      if (bit_of_point != nullptr) bit_of_point[first + j] = static_cast<std::uint32_t>(bit);
+    }
+  }
+  return count;
+}
+
+// The number of occupied voxels of `grid` in a bitmap over `box`. On two threads or more, each
+// half of the cloud (point_parts) sets its own bitmap and the count is that of their union: the
+// same count for any thread count.
+std::size_t count_in_bitmap(const PointCloud& cloud, const VoxelGrid& grid, const BitmapBox& box,
+                            std::size_t threads) {
+  const std::vector<PointRange> parts = resolve_thread_count(threads) >= 2
+                                            ? point_parts(cloud.size())
+                                            : std::vector<PointRange>{{0, cloud.size()}};
+  std::vector<RecycledVector<std::uint64_t>> bits(parts.size());
+  std::vector<std::size_t> counts(parts.size());
+  for_parts(parts.size(), threads, [&](std::size_t part) {
+    bits[part].assign(box.words, 0);
+    counts[part] = set_voxel_bits(cloud, grid, parts[part], box, bits[part]);
+  });
+  if (parts.size() == 1) return counts.front();
+  std::size_t count = 0;
+  for (std::size_t w = 0; w < box.words; ++w) {
+    std::uint64_t word = 0;
+    for (const auto& part : bits) word |= part[w];
+    count += static_cast<std::size_t>(std::popcount(word));
+  }
+  return count;
+}
+
+// The counting table of `grid` with every point's slot (as voxel_table<Counted> records it: the
+// voxels in first-seen order), on one thread, from a bitmap over `box`: a voxel's rank among the
+// set bits numbers it without a hash table, and a first-seen slot per rank (a few tens of KB)
+// renumbers it. Over `limit` voxels, only the count is kept (over_limit).
+VoxelTable<Counted> ranked_table(const PointCloud& cloud, const VoxelGrid& grid,
+                                 const BitmapBox& box, std::size_t limit) {
+  const std::size_t n = cloud.size();
+  VoxelTable<Counted> t{VoxelSlots(0), {}, {}, {}};
+  t.point_slots.resize(n);
+  RecycledVector<std::uint64_t> bits(box.words, 0);
+  const std::size_t count = set_voxel_bits(cloud, grid, {0, n}, box, bits, t.point_slots.data());
+  if (count > limit) {
+    t.over_limit = true;
+    t.point_slots.clear();
+    return t;
+  }
+  RecycledVector<std::uint32_t> rank_before(box.words);  // set bits in the words before
+  std::uint32_t rank = 0;
+  for (std::size_t w = 0; w < box.words; ++w) {
+    rank_before[w] = rank;
+    rank += static_cast<std::uint32_t>(std::popcount(bits[w]));
+  }
+  constexpr std::uint32_t kUnseen = std::numeric_limits<std::uint32_t>::max();
+  RecycledVector<std::uint32_t> slot_of_rank(count, kUnseen);
+  t.keys.reserve(count);
+  t.voxels.resize(count);
+  // Scans and depth images visit a voxel in runs: its slot is looked up when the bit changes.
+  std::uint32_t last_bit = kUnseen;
+  std::uint32_t last_slot = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t bit = t.point_slots[i];
+    if (bit != last_bit) {
+      const std::uint64_t word = bits[bit >> 6];
+      const std::uint64_t below = (std::uint64_t{1} << (bit & 63)) - 1;
+      std::uint32_t& slot = slot_of_rank[rank_before[bit >> 6] +
+                                         static_cast<std::uint32_t>(std::popcount(word & below))];
+      if (slot == kUnseen) {
+        slot = static_cast<std::uint32_t>(t.keys.size());
+        t.keys.push_back(grid.key(cloud.points[i]));
+      }
+      last_bit = bit;
+      last_slot = slot;
+    }
+    t.point_slots[i] = last_slot;
+  }
+  return t;
+}
+
+// The number of occupied voxels of `grid`, or limit + 1 when there are more than `limit`;
+// `expected` sizes a hash table where the bitmap would be too large.
+std::size_t count_voxels(const PointCloud& cloud, const VoxelGrid& grid, const BoundingBox& box,
+                         std::size_t expected, std::size_t limit, std::size_t threads) {
+  if (const std::optional<BitmapBox> bitmap = bitmap_box(cloud, grid, box)) {
+    return std::min(count_in_bitmap(cloud, grid, *bitmap, threads), limit + 1);
+  }
+  const VoxelTable<Counted> counted =
+      voxel_table<Counted>(cloud, grid, expected, limit, false, threads);
+  return counted.over_limit ? limit + 1 : counted.keys.size();
+}
+
+// The counting table of `grid` with every point's slot (voxel_table<Counted> recording them),
+// ranked in a bitmap on one thread when it fits (a KITTI scan's 1.5-1.7 -> ~0.9 ms), hashed
+// otherwise; the same table either way.
+VoxelTable<Counted> recorded_table(const PointCloud& cloud, const VoxelGrid& grid,
+                                   const BoundingBox& box, std::size_t expected, std::size_t limit,
+                                   std::size_t threads) {
+  if (resolve_thread_count(threads) == 1) {
+    if (const std::optional<BitmapBox> bitmap = bitmap_box(cloud, grid, box)) {
+      return ranked_table(cloud, grid, *bitmap, limit);
+    }
+  }
+  return voxel_table<Counted>(cloud, grid, expected, limit, true, threads);
+}
+
 }  // namespace
 
 // The voxels of a cloud with their sums. On two threads or more, a counting pass (its split
@@ -200,110 +373,20 @@ VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m
   const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
   const std::size_t n = cloud.size();
   constexpr std::size_t kNoLimit = std::numeric_limits<std::size_t>::max();
-  if (resolve_thread_count(threads) >= 2 && n >= kMinPointsToSplit &&
-      n <= std::numeric_limits<std::uint32_t>::max()) {
+  if (n < kMinPointsToSplit || n > std::numeric_limits<std::uint32_t>::max()) {
+    return voxel_table<Voxel>(cloud, grid, n / 8, kNoLimit, false, threads);
+  }
+  if (resolve_thread_count(threads) >= 2) {
     return accumulate_counted<Voxel>(
         cloud, voxel_table<Counted>(cloud, grid, n / 8, kNoLimit, true, threads), threads);
+  }
+  if (const std::optional<BitmapBox> bitmap = bitmap_box(cloud, grid, BoundingBox::of(cloud))) {
+    return accumulate_counted<Voxel>(cloud, ranked_table(cloud, grid, *bitmap, kNoLimit), threads);
   }
   return voxel_table<Voxel>(cloud, grid, n / 8, kNoLimit, false, threads);
 }
 
 namespace {
-
-// The size search's counts need no voxel's slot, key or first-seen order, only how many: a
-// bitmap over the box of voxels that the cloud spans, one bit a voxel, when it is small enough
-// to clear (at most kBitmapBitsPerPoint bits per point, within [2^23, 2^28] bits). A bit is one
-// load and store where the hash table's voxel is a 32-byte entry found by probing: a KITTI
-// scan's counting passes 1.1-2.2 -> 0.5-0.9 ms.
-constexpr double kBitmapBitsPerPoint = 128.0;
-constexpr double kMinBitmapBits = 0x1p23;
-constexpr double kMaxBitmapBits = 0x1p28;
-
-// Points per block of set_voxel_bits: their indices (3 int32 each) stay in the L1 cache.
-constexpr std::size_t kBitmapBlock = 256;
-
-// The number of occupied voxels of `grid` among the points of `range`, counted in `bits` (all
-// clear, one bit per voxel of the box from `low` with `nx` x `ny` voxels a layer): the bits it
-// sets. The indices of a block of points are made first in one loop over their coordinates, in
-// int32 lanes the compiler vectorises, then the bits.
-std::size_t set_voxel_bits(const PointCloud& cloud, const VoxelGrid& grid, PointRange range,
-                           const std::array<std::int32_t, 3>& low, std::uint64_t nx,
-                           std::uint64_t ny, RecycledVector<std::uint64_t>& bits) {
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
-  std::array<std::int32_t, 3 * kBitmapBlock> indices{};
-  std::size_t count = 0;
-  for (std::size_t first = range.begin; first < range.end; first += kBitmapBlock) {
-    const std::size_t points = std::min(kBitmapBlock, range.end - first);
-    const float* coordinates = cloud.points[first].data();
-    for (std::size_t k = 0; k < 3 * points; ++k) {
-      indices[k] = grid.index<std::int32_t>(coordinates[k]);
-    }
-    for (std::size_t j = 0; j < points; ++j) {
-      const auto along = [&](std::size_t axis) {
-        return static_cast<std::uint64_t>(
-            static_cast<std::uint32_t>(indices[3 * j + axis] - low[axis]));
-      };
-      const std::uint64_t bit = along(0) + nx * (along(1) + ny * along(2));
-      std::uint64_t& word = bits[bit >> 6];
-      const std::uint64_t mask = std::uint64_t{1} << (bit & 63);
-      count += (word & mask) == 0 ? 1 : 0;
-      word |= mask;
-    }
-  }
-  return count;
-}
-
-// The number of occupied voxels of `grid` (`box`: the cloud's exact bounding box), or nullopt
-// when the box spans too many voxels for a bitmap or its indices exceed int32. On two threads
-// or more, each half of the cloud (point_parts) sets its own bitmap and the count is that of
-// their union: the same count for any thread count.
-std::optional<std::size_t> count_in_bitmap(const PointCloud& cloud, const VoxelGrid& grid,
-                                           const BoundingBox& box, std::size_t threads) {
-  const double largest = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
-  if (!(largest * grid.inverse_size() < 0x1p30)) return std::nullopt;
-  const VoxelKey low = grid.key(box.min.cast<float>());
-  const VoxelKey high = grid.key(box.max.cast<float>());
-  const double nx = static_cast<double>(high.x - low.x) + 1.0;
-  const double ny = static_cast<double>(high.y - low.y) + 1.0;
-  const double nz = static_cast<double>(high.z - low.z) + 1.0;
-  const double budget = std::clamp(kBitmapBitsPerPoint * static_cast<double>(cloud.size()),
-                                   kMinBitmapBits, kMaxBitmapBits);
-  if (!(nx * ny * nz <= budget)) return std::nullopt;
-  const auto words = static_cast<std::size_t>(nx * ny * nz) / 64 + 1;
-  const std::array<std::int32_t, 3> low32{static_cast<std::int32_t>(low.x),
-                                          static_cast<std::int32_t>(low.y),
-                                          static_cast<std::int32_t>(low.z)};
-  const std::vector<PointRange> parts = resolve_thread_count(threads) >= 2
-                                            ? point_parts(cloud.size())
-                                            : std::vector<PointRange>{{0, cloud.size()}};
-  std::vector<RecycledVector<std::uint64_t>> bits(parts.size());
-  std::vector<std::size_t> counts(parts.size());
-  for_parts(parts.size(), threads, [&](std::size_t part) {
-    bits[part].assign(words, 0);
-    counts[part] = set_voxel_bits(cloud, grid, parts[part], low32, static_cast<std::uint64_t>(nx),
-                                  static_cast<std::uint64_t>(ny), bits[part]);
-  });
-  if (parts.size() == 1) return counts.front();
-  std::size_t count = 0;
-  for (std::size_t w = 0; w < words; ++w) {
-    std::uint64_t word = 0;
-    for (const auto& part : bits) word |= part[w];
-    count += static_cast<std::size_t>(std::popcount(word));
-  }
-  return count;
-}
-
-// The number of occupied voxels of `grid`, or limit + 1 when there are more than `limit`;
-// `expected` sizes a hash table where the bitmap would be too large.
-std::size_t count_voxels(const PointCloud& cloud, const VoxelGrid& grid, const BoundingBox& box,
-                         std::size_t expected, std::size_t limit, std::size_t threads) {
-  if (const std::optional<std::size_t> count = count_in_bitmap(cloud, grid, box, threads)) {
-    return std::min(*count, limit + 1);
-  }
-  const VoxelTable<Counted> counted =
-      voxel_table<Counted>(cloud, grid, expected, limit, false, threads);
-  return counted.over_limit ? limit + 1 : counted.keys.size();
-}
 
 // voxel_size_for_count on up to `threads` threads; `settled` (if not null) receives the counting
 // pass of the returned size when one counted it (the search ended within its tolerance), else
@@ -340,14 +423,14 @@ double search_voxel_size(const PointCloud& cloud, std::size_t target_points, std
     const bool near = previous_count >= 0.5 * target && previous_count <= 2.0 * target;
     std::optional<VoxelTable<Counted>> counted;
     if (keep && near) {
-      counted = voxel_table<Counted>(cloud, grid, target_points, limit, true, threads);
+      counted = recorded_table(cloud, grid, extent, target_points, limit, threads);
     }
     const auto count = static_cast<double>(
         counted ? (counted->over_limit ? limit + 1 : counted->keys.size())
                 : count_voxels(cloud, grid, extent, target_points, limit, threads));
     if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) {
       if (keep && !counted) {
-        counted = voxel_table<Counted>(cloud, grid, target_points, limit, true, threads);
+        counted = recorded_table(cloud, grid, extent, target_points, limit, threads);
       }
       if (keep) *settled = std::move(counted);
       break;
