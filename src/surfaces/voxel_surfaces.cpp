@@ -25,11 +25,21 @@ namespace {
 PointSurface block_surface_of(const Moments& block, const Eigen::Vector3f& centroid,
                               const NeighborhoodSettings& stored, double* linearity) {
   const Eigen::Vector3d mean = block.sum / block.count;
+  // outer / count - mean mean^T element by element (the same roundings as the matrix
+  // expression, whose temporaries were stored and reloaded across a failed store forwarding: a
+  // tenth of the sweep), each of the 6 once: mean_i mean_j = mean_j mean_i exactly.
   const auto& outer = block.outer;
+  const auto centred = [&](std::size_t k, int i, int j) {
+    return outer[k] / block.count - mean[i] * mean[j];
+  };
+  const double xx = centred(0, 0, 0);
+  const double xy = centred(1, 0, 1);
+  const double xz = centred(2, 0, 2);
+  const double yy = centred(3, 1, 1);
+  const double yz = centred(4, 1, 2);
+  const double zz = centred(5, 2, 2);
   Eigen::Matrix3d covariance;
-  covariance << outer[0], outer[1], outer[2], outer[1], outer[3], outer[4], outer[2], outer[4],
-      outer[5];
-  covariance = covariance / block.count - mean * mean.transpose();
+  covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   return describe_covariance(centroid, mean, covariance, static_cast<std::size_t>(block.count),
                              stored, nullptr, linearity);
 }
