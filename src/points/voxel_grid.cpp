@@ -1,7 +1,6 @@
 #include "sgdicp/points/voxel_grid.hpp"
 
 #include <array>
-#include <bit>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -199,6 +198,15 @@ constexpr double kMaxBitmapBits = 0x1p28;
 // Points per block of set_voxel_bits: their indices (3 int32 each) stay in the L1 cache.
 constexpr std::size_t kBitmapBlock = 256;
 
+// The set bits of a word, inline: a portable build (no POPCNT instruction) makes std::popcount a
+// library call, 3.5 % of a KITTI scan's reference preparation when ranking its bitmap.
+inline std::uint32_t set_bits(std::uint64_t word) {
+  word -= (word >> 1) & 0x5555555555555555ULL;
+  word = (word & 0x3333333333333333ULL) + ((word >> 2) & 0x3333333333333333ULL);
+  word = (word + (word >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+  return static_cast<std::uint32_t>((word * 0x0101010101010101ULL) >> 56);
+}
+
 // The box of voxels that a cloud spans on a grid, for bitmaps of one bit a voxel: the lowest
 // voxel and the spans along x and y, the bits (voxels) and 64-bit words.
 struct BitmapBox {
@@ -281,7 +289,7 @@ std::size_t count_in_bitmap(const PointCloud& cloud, const VoxelGrid& grid, cons
   for (std::size_t w = 0; w < box.words; ++w) {
     std::uint64_t word = 0;
     for (const auto& part : bits) word |= part[w];
-    count += static_cast<std::size_t>(std::popcount(word));
+    count += set_bits(word);
   }
   return count;
 }
@@ -306,7 +314,7 @@ VoxelTable<Counted> ranked_table(const PointCloud& cloud, const VoxelGrid& grid,
   std::uint32_t rank = 0;
   for (std::size_t w = 0; w < box.words; ++w) {
     rank_before[w] = rank;
-    rank += static_cast<std::uint32_t>(std::popcount(bits[w]));
+    rank += set_bits(bits[w]);
   }
   constexpr std::uint32_t kUnseen = std::numeric_limits<std::uint32_t>::max();
   RecycledVector<std::uint32_t> slot_of_rank(count, kUnseen);
@@ -320,8 +328,7 @@ VoxelTable<Counted> ranked_table(const PointCloud& cloud, const VoxelGrid& grid,
     if (bit != last_bit) {
       const std::uint64_t word = bits[bit >> 6];
       const std::uint64_t below = (std::uint64_t{1} << (bit & 63)) - 1;
-      std::uint32_t& slot = slot_of_rank[rank_before[bit >> 6] +
-                                         static_cast<std::uint32_t>(std::popcount(word & below))];
+      std::uint32_t& slot = slot_of_rank[rank_before[bit >> 6] + set_bits(word & below)];
       if (slot == kUnseen) {
         slot = static_cast<std::uint32_t>(t.keys.size());
         t.keys.push_back(grid.key(cloud.points[i]));
