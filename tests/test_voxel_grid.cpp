@@ -5,14 +5,17 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <random>
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
+#include "points/voxel_table.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/io/io.hpp"
 #include "sgdicp/metrics/metrics.hpp"
+#include "sgdicp/points/scaling.hpp"
 #include "sgdicp/points/voxel_grid.hpp"
 #include "sgdicp/registration/batch_icp.hpp"
 #include "sgdicp/registration/methods.hpp"
@@ -116,6 +119,74 @@ TEST(VoxelSizeForCount, RealCloudsKeepAboutTheTarget) {
     const PointCloud cloud = read_point_cloud(file).cloud;
     const std::size_t kept = voxel_downsample(cloud, voxel_size_for_count(cloud, 20000)).size();
     EXPECT_LT(relative_error(kept, 20000), 0.15) << file << ": " << kept;
+  }
+}
+
+// The search as it counted before its bitmaps: each step's count is that of the thinning
+// itself (a hash table of the voxels), the same start, secant steps, tolerance and passes.
+double size_counted_by_thinning(const PointCloud& cloud, std::size_t target_points) {
+  const BoundingBox box = bulk_bounding_box(cloud).box;
+  const auto target = static_cast<double>(target_points);
+  const auto limit = static_cast<double>(8 * target_points);
+  double size = (box.max - box.min).norm() / std::sqrt(target);
+  double previous_size = 0.0;
+  double previous_count = 0.0;
+  double slope = 2.0;
+  for (int pass = 0; pass < 6; ++pass) {
+    const double count =
+        std::min(static_cast<double>(voxel_downsample(cloud, size).size()), limit + 1.0);
+    if (std::abs(count / target - 1.0) <= 0.15) break;
+    if (previous_size > 0.0 && count <= limit && previous_count <= limit &&
+        count != previous_count) {
+      slope =
+          std::clamp(std::log(previous_count / count) / std::log(size / previous_size), 0.5, 3.0);
+    }
+    previous_size = size;
+    previous_count = count;
+    size *= std::pow(count / target, 1.0 / slope);
+  }
+  return size;
+}
+
+// The size search counts in bitmaps (or a hash table where the bitmap would be too large): the
+// same counts, so the same steps and size as counting the thinning's voxels, on surfaces,
+// volumes and lines, a dense cluster in a sparse spread, and a far point that makes the bitmap
+// too large; and the tables ranked in bitmaps on one thread are those hashed on two.
+TEST(VoxelSizeForCount, BitmapsCountAndNumberVoxelsAsTheHashTableDoes) {
+  std::vector<PointCloud> clouds;
+  for (int kind = 0; kind < 3; ++kind) clouds.push_back(surface_volume_or_line(kind));
+  PointCloud mixed = synthetic_scene(5, 50000);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<float> u(-60.0F, 60.0F);
+  for (int i = 0; i < 20000; ++i) mixed.points.emplace_back(u(rng), u(rng), 0.1F * u(rng));
+  clouds.push_back(mixed);
+  PointCloud far = mixed;
+  far.points.emplace_back(3e4F, -2e4F, 1e3F);
+  clouds.push_back(far);
+  for (std::size_t c = 0; c < clouds.size(); ++c) {
+    for (const std::size_t target : {500U, 5000U, 20000U}) {
+      const double expected = size_counted_by_thinning(clouds[c], target);
+      EXPECT_EQ(voxel_size_for_count(clouds[c], target), expected) << c << " " << target;
+      // One thread ranks the table of the size found in a bitmap, two hash it: the same voxels
+      // in the same order, and the same slot for every point.
+      std::optional<detail::VoxelTable<detail::Counted>> ranked;
+      std::optional<detail::VoxelTable<detail::Counted>> hashed;
+      EXPECT_EQ(detail::grid_size(clouds[c], 0.0, target, 1, &ranked), expected);
+      EXPECT_EQ(detail::grid_size(clouds[c], 0.0, target, 2, &hashed), expected);
+      ASSERT_EQ(ranked.has_value(), hashed.has_value());
+      if (ranked) {
+        EXPECT_EQ(ranked->keys.size(), voxel_downsample(clouds[c], expected).size());
+        EXPECT_TRUE(std::equal(ranked->keys.begin(), ranked->keys.end(), hashed->keys.begin(),
+                               hashed->keys.end()));
+        EXPECT_TRUE(std::equal(ranked->point_slots.begin(), ranked->point_slots.end(),
+                               hashed->point_slots.begin(), hashed->point_slots.end()));
+        EXPECT_EQ(ranked->point_slots.size(), clouds[c].size());
+      }
+      // voxel_downsample ranks its table too: the same centroids on one and two threads.
+      const PointCloud one = voxel_downsample(clouds[c], expected, 1);
+      const PointCloud two = voxel_downsample(clouds[c], expected, 2);
+      EXPECT_EQ(one.points, two.points);
+    }
   }
 }
 
@@ -280,8 +351,9 @@ void expect_block_covariances(const PointCloud& cloud, double voxel, std::size_t
 
 // No block misses a neighbour or counts one twice: on layers with holes (so that the sweep over
 // the sorted voxels meets columns with missing voxels, empty columns and negative indices), on
-// the radix-sorted path and, with a second layer 20 km away (index spans of 22 bits per axis,
-// too wide for one word with the slot), on the compared path.
+// the radix-sorted path with the sweep's packed keys and, with a second layer 20 km away (index
+// spans of 22 bits per axis, too wide for one word with the slot or with the sweep's spare
+// bits), on the compared path with the keys as they are.
 TEST(VoxelSurfaces, EveryBlockHoldsExactlyItsPointsNeighbourhood) {
   expect_block_covariances(holey_layer(Eigen::Vector3d::Zero(), 0.1, 12000, 5), 0.1, 7);
   const double voxel = 0.005;

@@ -148,17 +148,22 @@ class VoxelGrid {
     return {index(p.x()), index(p.y()), index(p.z())};
   }
 
- private:
   // floor() without the libm call a portable build makes of std::floor (8 % of a downsampling),
   // of a product with the inverse size: the three divisions were a third of a counting pass
   // (3-4 % of a dense frame's registration: PCL Kinect frames 26.4 -> 25.3 ms). A key can
-  // differ from the quotient's only for a coordinate within an ulp of a voxel boundary.
-  [[nodiscard]] std::int64_t index(float coordinate) const noexcept {
+  // differ from the quotient's only for a coordinate within an ulp of a voxel boundary. Int:
+  // std::int32_t where the caller knows that |coordinate| / size < 2^30 (the size search's
+  // bitmaps: a loop of these vectorises), the same index as the int64 one.
+  template <class Int = std::int64_t>
+  [[nodiscard]] Int index(float coordinate) const noexcept {
     const double q = static_cast<double>(coordinate) * inverse_size_;
-    const auto i = static_cast<std::int64_t>(q);
+    const auto i = static_cast<Int>(q);
     return static_cast<double>(i) > q ? i - 1 : i;
   }
 
+  [[nodiscard]] double inverse_size() const noexcept { return inverse_size_; }
+
+ private:
   double inverse_size_;
 };
 

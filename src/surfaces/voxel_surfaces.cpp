@@ -5,6 +5,7 @@
 #include <atomic>
 #include <bit>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -24,11 +25,21 @@ namespace {
 PointSurface block_surface_of(const Moments& block, const Eigen::Vector3f& centroid,
                               const NeighborhoodSettings& stored, double* linearity) {
   const Eigen::Vector3d mean = block.sum / block.count;
+  // outer / count - mean mean^T element by element (the same roundings as the matrix
+  // expression, whose temporaries were stored and reloaded across a failed store forwarding: a
+  // tenth of the sweep), each of the 6 once: mean_i mean_j = mean_j mean_i exactly.
   const auto& outer = block.outer;
+  const auto centred = [&](std::size_t k, int i, int j) {
+    return outer[k] / block.count - mean[i] * mean[j];
+  };
+  const double xx = centred(0, 0, 0);
+  const double xy = centred(1, 0, 1);
+  const double xz = centred(2, 0, 2);
+  const double yy = centred(3, 1, 1);
+  const double yz = centred(4, 1, 2);
+  const double zz = centred(5, 2, 2);
   Eigen::Matrix3d covariance;
-  covariance << outer[0], outer[1], outer[2], outer[1], outer[3], outer[4], outer[2], outer[4],
-      outer[5];
-  covariance = covariance / block.count - mean * mean.transpose();
+  covariance << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   return describe_covariance(centroid, mean, covariance, static_cast<std::size_t>(block.count),
                              stored, nullptr, linearity);
 }
@@ -39,41 +50,117 @@ struct KeyedSlot {
   std::uint32_t slot;
 };
 
-// The block sums of the voxels sorted[begin, end) (sorted by key), adding the 27 voxels in one
-// fixed order (dx, dy, dz each from -1 to 1): for each of the 9 columns (x+dx, y+dy) a cursor
-// moves forward through the sorted keys as the voxels do, and the column's voxels dz = -1..1 are
-// the next ones at its cursor. Sequential reads instead of 26 hash-table probes per voxel, which
-// missed the cache and were 22 % of a Kinect registration's cycles (the sweep: 8.6 %).
-template <class Visit>
-void sweep_blocks(const RecycledVector<KeyedSlot>& sorted, const RecycledVector<Moments>& moments,
-                  std::size_t begin, std::size_t end, const Visit& visit) {
-  // The lowest voxel of column c (dx = c / 3 - 1, dy = c % 3 - 1) of centre's block.
-  const auto lowest_of = [](const VoxelKey& centre, std::size_t c) {
+// The voxels' keys in the sweep's order as they are: the lowest voxel of column c (dx = c / 3 - 1,
+// dy = c % 3 - 1) of a centre's block, and whether a key at or after it lies within the column's
+// three (x, y equal, z at most 2 higher).
+struct Keys {
+  const RecycledVector<KeyedSlot>& sorted;
+
+  [[nodiscard]] const VoxelKey& operator[](std::size_t k) const { return sorted[k].key; }
+  [[nodiscard]] static VoxelKey lowest(const VoxelKey& centre, std::size_t c) {
     return VoxelKey{centre.x + static_cast<std::int64_t>(c / 3) - 1,
                     centre.y + static_cast<std::int64_t>(c % 3) - 1, centre.z - 1};
+  }
+  [[nodiscard]] static bool within(const VoxelKey& key, const VoxelKey& lowest) {
+    return key.x == lowest.x && key.y == lowest.y && key.z <= lowest.z + 2;
+  }
+};
+
+// The same keys packed in one word each, x then y then z from the most significant bits, each
+// index offset by 1 from the grid's lowest with a spare bit (PackedKeys::of), so that a block's
+// neighbours (+-1 along x and y, -1..+1 along z) are sums and differences of the word that never
+// carry into the next field: one integer comparison where the keys' took up to three, whose
+// branches were a quarter of the sweep's cycles.
+struct PackedKeys {
+  RecycledVector<std::uint64_t> words;
+  std::uint64_t step_x = 0;  // +1 along x in the word
+  std::uint64_t step_y = 0;
+
+  [[nodiscard]] std::uint64_t operator[](std::size_t k) const { return words[k]; }
+  [[nodiscard]] std::uint64_t lowest(std::uint64_t centre, std::size_t c) const {
+    return centre + (c / 3) * step_x + (c % 3) * step_y - step_x - step_y - 1;
+  }
+  [[nodiscard]] static bool within(std::uint64_t key, std::uint64_t lowest) {
+    return key <= lowest + 2;
+  }
+
+  // The packed keys of `sorted`, or nullopt when the indices' spans with their spare bits need
+  // more than 64 bits.
+  static std::optional<PackedKeys> of(const RecycledVector<KeyedSlot>& sorted);
+};
+
+std::optional<PackedKeys> PackedKeys::of(const RecycledVector<KeyedSlot>& sorted) {
+  if (sorted.empty()) return PackedKeys{};
+  VoxelKey low = sorted.front().key;
+  VoxelKey high = sorted.front().key;
+  for (const KeyedSlot& e : sorted) {
+    low = {std::min(low.x, e.key.x), std::min(low.y, e.key.y), std::min(low.z, e.key.z)};
+    high = {std::max(high.x, e.key.x), std::max(high.y, e.key.y), std::max(high.z, e.key.z)};
+  }
+  // An index i of a field with span s = high - low is stored as i - low + 1, and its neighbours
+  // from i - low to i - low + 2 <= s + 2 < 2^(bit_width(s) + 1).
+  const auto width = [](std::int64_t a, std::int64_t b) {
+    return std::bit_width(static_cast<std::uint64_t>(b - a)) + 1;
   };
+  const int bz = width(low.z, high.z);
+  const int by = width(low.y, high.y);
+  const int bx = width(low.x, high.x);
+  if (bx + by + bz > 64) return std::nullopt;
+  PackedKeys packed;
+  packed.step_y = std::uint64_t{1} << bz;
+  packed.step_x = std::uint64_t{1} << (by + bz);
+  packed.words.resize(sorted.size());
+  for (std::size_t k = 0; k < sorted.size(); ++k) {
+    const VoxelKey& key = sorted[k].key;
+    const auto field = [](std::int64_t i, std::int64_t from) {
+      return static_cast<std::uint64_t>(i - from) + 1;
+    };
+    packed.words[k] = field(key.x, low.x) * packed.step_x + field(key.y, low.y) * packed.step_y +
+                      field(key.z, low.z);
+  }
+  return packed;
+}
+
+// The block sums of the voxels sorted[begin, end) (sorted by key; `keys` the same keys, as they
+// are or packed), adding the 27 voxels in one fixed order (dx, dy, dz each from -1 to 1): for
+// each of the 9 columns (x+dx, y+dy) a cursor moves forward through the sorted keys as the
+// voxels do, and the column's voxels dz = -1..1 are the next ones at its cursor. Sequential
+// reads instead of 26 hash-table probes per voxel, which missed the cache and were 22 % of a
+// Kinect registration's cycles (the sweep: 8.6 %). `moments` are in the keys' order (sorted[k]'s
+// at k), so that the cursors read them in sequence too; visit(slot, block sum, the voxel's own
+// moments).
+template <class KeysInOrder, class Visit>
+void sweep_blocks(const RecycledVector<KeyedSlot>& sorted, const KeysInOrder& keys,
+                  const RecycledVector<Moments>& moments, std::size_t begin, std::size_t end,
+                  const Visit& visit) {
+  const std::size_t n = sorted.size();
   std::array<std::size_t, 9> cursor{};
   for (std::size_t c = 0; c < 9 && begin < end; ++c) {
-    const VoxelKey lowest = lowest_of(sorted[begin].key, c);
-    cursor[c] = static_cast<std::size_t>(
-        std::partition_point(sorted.begin(), sorted.end(),
-                             [&](const KeyedSlot& e) { return e.key < lowest; }) -
-        sorted.begin());
+    const auto lowest = keys.lowest(keys[begin], c);
+    std::size_t first = 0;  // the first key not below `lowest`
+    for (std::size_t count = n; count > 0;) {
+      const std::size_t half = count / 2;
+      if (keys[first + half] < lowest) {
+        first += half + 1;
+        count -= half + 1;
+      } else {
+        count = half;
+      }
+    }
+    cursor[c] = first;
   }
-  const std::size_t n = sorted.size();
   for (std::size_t i = begin; i < end; ++i) {
     Moments block;
     for (std::size_t c = 0; c < 9; ++c) {
-      const VoxelKey lowest = lowest_of(sorted[i].key, c);
+      const auto lowest = keys.lowest(keys[i], c);
       std::size_t& j = cursor[c];
-      while (j < n && sorted[j].key < lowest) ++j;
+      while (j < n && keys[j] < lowest) ++j;
       for (std::size_t k = j; k < n && k < j + 3; ++k) {
-        const VoxelKey& key = sorted[k].key;
-        if (key.x != lowest.x || key.y != lowest.y || key.z > lowest.z + 2) break;
-        block += moments[sorted[k].slot];
+        if (!KeysInOrder::within(keys[k], lowest)) break;
+        block += moments[k];
       }
     }
-    visit(sorted[i].slot, block);
+    visit(sorted[i].slot, block, moments[i]);
   }
 }
 
@@ -160,6 +247,8 @@ void sweep_surfaces(const VoxelTable<Moments>& table, const NeighborhoodSettings
   covariances.resize(n);
   if (linearities != nullptr) linearities->resize(n);
   RecycledVector<KeyedSlot> sorted;
+  RecycledVector<Moments> in_key_order;  // voxels[sorted[k].slot] at k
+  std::optional<PackedKeys> packed;
   // The sort's state for the threads that wait for it: pending, done, or failed (its exception
   // reaches the caller through parallel_chunks; nobody sweeps then).
   enum class SortState : int { pending, done, failed };
@@ -170,20 +259,27 @@ void sweep_surfaces(const VoxelTable<Moments>& table, const NeighborhoodSettings
     for (;;) {
       const std::size_t begin = next_chunk.fetch_add(kSweepChunk, std::memory_order_relaxed);
       if (begin >= n) return;
-      sweep_blocks(sorted, voxels, begin, std::min(n, begin + kSweepChunk),
-                   [&](std::uint32_t v, const Moments& block) {
-                     double* linearity = linearities != nullptr ? &(*linearities)[v] : nullptr;
-                     const PointSurface s =
-                         block_surface_of(block, voxels[v].centroid(), stored, linearity);
-                     normals[v] = s.normal;
-                     covariances[v] = s.covariance;
-                   });
+      const auto surface = [&](std::uint32_t v, const Moments& block, const Moments& own) {
+        double* linearity = linearities != nullptr ? &(*linearities)[v] : nullptr;
+        const PointSurface s = block_surface_of(block, own.centroid(), stored, linearity);
+        normals[v] = s.normal;
+        covariances[v] = s.covariance;
+      };
+      const std::size_t chunk_end = std::min(n, begin + kSweepChunk);
+      if (packed) {
+        sweep_blocks(sorted, *packed, in_key_order, begin, chunk_end, surface);
+      } else {
+        sweep_blocks(sorted, Keys{sorted}, in_key_order, begin, chunk_end, surface);
+      }
     }
   };
   const auto sort_keys = [&] {
     SortState state = SortState::failed;
     try {
       sorted = sorted_by_key(table.keys);
+      in_key_order.resize(n);
+      for (std::size_t k = 0; k < n; ++k) in_key_order[k] = voxels[sorted[k].slot];
+      packed = PackedKeys::of(sorted);
       state = SortState::done;
     } catch (...) {
       sort_state.store(state, std::memory_order_release);
