@@ -6,6 +6,7 @@
 #include <bit>
 #include <cstdint>
 #include <optional>
+#include <ranges>
 #include <utility>
 #include <vector>
 
@@ -137,17 +138,9 @@ void sweep_blocks(const RecycledVector<KeyedSlot>& sorted, const KeysInOrder& ke
   std::array<std::size_t, 9> cursor{};
   for (std::size_t c = 0; c < 9 && begin < end; ++c) {
     const auto lowest = keys.lowest(keys[begin], c);
-    std::size_t first = 0;  // the first key not below `lowest`
-    for (std::size_t count = n; count > 0;) {
-      const std::size_t half = count / 2;
-      if (keys[first + half] < lowest) {
-        first += half + 1;
-        count -= half + 1;
-      } else {
-        count = half;
-      }
-    }
-    cursor[c] = first;
+    // The first key not below `lowest`: a binary search over the indices of `keys`.
+    cursor[c] = *std::ranges::partition_point(std::views::iota(std::size_t{0}, n),
+                                              [&](std::size_t k) { return keys[k] < lowest; });
   }
   for (std::size_t i = begin; i < end; ++i) {
     Moments block;
