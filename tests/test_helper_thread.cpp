@@ -1,7 +1,9 @@
 // The helper thread of a registration's mini-batch queries (src/util/helper_thread.hpp).
 #include "util/helper_thread.hpp"
+#include "util/wake_counter.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -102,6 +104,66 @@ TEST(ForkedProcess, RunsRangesOnHelpersOfItsOwn) {
   ASSERT_TRUE(WIFEXITED(status)) << "the child hung or crashed";
   EXPECT_EQ(WEXITSTATUS(status), 0);
   EXPECT_EQ(std::count(visits.begin(), visits.end(), 1), 100);
+}
+
+// Two threads hand a counter back and forth, every wait asleep (no spins) or after a few spins,
+// so that each hand-off meets the sleeping path at a different moment. A lost wakeup leaves
+// both asleep: the child process's alarm then ends it, which fails the test instead of hanging.
+TEST(WakeCounter, NeverSleepsThroughAChange) {
+  for (const int spins : {0, 3, 40}) {
+    const pid_t child = fork();
+    ASSERT_NE(child, -1);
+    if (child == 0) {
+      alarm(60);
+      detail::WakeCounter ping(spins);
+      detail::WakeCounter pong(spins);
+      constexpr std::uint32_t kRounds = 20000;
+      std::jthread other([&] {
+        std::uint32_t seen = 0;
+        while (seen != kRounds) {
+          seen = ping.wait_change(seen);
+          pong.store(seen);
+        }
+      });
+      for (std::uint32_t round = 1; round <= kRounds; ++round) {
+        ping.store(round);
+        std::uint32_t answer = pong.load();
+        while (answer != round) answer = pong.wait_change(answer);
+      }
+      other.join();
+      _exit(0);
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status)) << "a hand-off was lost with " << spins << " spins (hung)";
+    EXPECT_EQ(WEXITSTATUS(status), 0);
+  }
+}
+
+// The helper's hand-offs at the edge of its spin phase: jobs whose length straddles the time the
+// caller spins before it sleeps, many times, under the same alarm.
+TEST(HelperThread, SoaksAtTheEdgeOfItsSpinPhase) {
+  const pid_t child = fork();
+  ASSERT_NE(child, -1);
+  if (child == 0) {
+    alarm(60);
+    detail::HelperThread helper;
+    std::uint64_t state = 1;
+    volatile std::uint64_t sink = 0;
+    for (int round = 0; round < 4000; ++round) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      const std::uint64_t helper_steps = 20000 + (state >> 40) % 60000;  // ~20-90 us
+      helper.split(2, [&](std::size_t begin, std::size_t) {
+        const std::uint64_t steps = begin == 0 ? 0 : helper_steps;
+        for (std::uint64_t i = 0; i < steps; ++i) sink = sink + i;
+      });
+    }
+    _exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "the caller or the helper slept through a hand-off (hung)";
+  EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 }  // namespace

@@ -16,6 +16,8 @@
 
 #include <unistd.h>
 
+#include "util/wake_counter.hpp"
+
 namespace sgdicp::detail {
 
 class HelperThread {
@@ -62,52 +64,25 @@ class HelperThread {
   }
 
  private:
-  // Spins this many pauses (~20-90 us) before sleeping: longer than the caller's work between
-  // two batches, so a run's helper never sleeps, and short enough not to burn a core after it.
-  static constexpr int kSpins = 2048;
-
-  static void pause() noexcept {
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_ia32_pause();
-#else
-    std::this_thread::yield();
-#endif
-  }
-
-  // Waits until `value` differs from `old`; returns the new value.
-  static std::uint32_t wait_change(const std::atomic<std::uint32_t>& value, std::uint32_t old) {
-    for (int spin = 0; spin < kSpins; ++spin) {
-      const std::uint32_t now = value.load(std::memory_order_acquire);
-      if (now != old) return now;
-      pause();
-    }
-    value.wait(old, std::memory_order_acquire);
-    return value.load(std::memory_order_acquire);
-  }
-
-  void publish() {
-    posted_.fetch_add(1, std::memory_order_release);
-    posted_.notify_one();
-  }
+  void publish() { posted_.increment(); }
 
   void wait_done() {
-    const std::uint32_t target = posted_.load(std::memory_order_relaxed);
-    std::uint32_t done = done_.load(std::memory_order_acquire);
-    while (done != target) done = wait_change(done_, done);
+    const std::uint32_t target = posted_.load();
+    std::uint32_t done = done_.load();
+    while (done != target) done = done_.wait_change(done);
   }
 
   void serve() {
     std::uint32_t seen = 0;
     for (;;) {
-      seen = wait_change(posted_, seen);
+      seen = posted_.wait_change(seen);
       if (stop_.load(std::memory_order_relaxed)) return;
       try {
         job_(context_, begin_, end_);
       } catch (...) {
         error_ = std::current_exception();
       }
-      done_.store(seen, std::memory_order_release);
-      done_.notify_one();
+      done_.store(seen);
     }
   }
 
@@ -118,8 +93,8 @@ class HelperThread {
   std::size_t end_ = 0;
   std::exception_ptr error_;  // written by the helper before done_
   std::atomic<bool> stop_{false};
-  std::atomic<std::uint32_t> posted_{0};
-  std::atomic<std::uint32_t> done_{0};
+  WakeCounter posted_;   // jobs handed over; written by the caller, waited on by the helper
+  WakeCounter done_;     // jobs finished; written by the helper, waited on by the caller
   std::jthread thread_;  // last: starts after the members above exist, joins before they go
 };
 
