@@ -63,7 +63,7 @@ run_asan_ci() {
 }
 
 TSAN_TARGETS=(test_stress test_core test_registration test_solver_parts test_preprocessing sgdicp_cli)
-TSAN_TESTS='^(Load\.|HelperThread\.|RecyclingAllocator\.|VoxelSurfaces\.EveryBlock|Threads\.|NearestNeighborTest\.Concurrent|ReferenceReuse\.|Covariances\.IdenticalForAnyThreadCount|VoxelDownsample\.HalvesMerge|RegistrationVoxelGrid\.TreeAlongside)'
+TSAN_TESTS='^(Load\.|HelperThread\.|WakeCounter\.|RecyclingAllocator\.|VoxelSurfaces\.EveryBlock|Threads\.|NearestNeighborTest\.Concurrent|ReferenceReuse\.|Covariances\.IdenticalForAnyThreadCount|VoxelDownsample\.HalvesMerge|RegistrationVoxelGrid\.TreeAlongside)'
 
 tsan_bench() {  # the demo pair, twice per method, on two threads
   local pairs=build-tsan/demo_pairs.txt
