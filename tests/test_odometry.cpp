@@ -2,6 +2,7 @@
 // exact ground truth (the voxel map: test_voxel_map.cpp; the real sequences:
 // test_odometry_real_data.cpp).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -102,6 +103,42 @@ TEST(MotionModel, ASteadyMotionIsPredictedAsItIs) {
   EXPECT_TRUE(model.predicted().isApprox(step, 1e-12));
   model.forget_last();  // frames lost: the motion since the last registered one is unknown
   EXPECT_TRUE(model.predicted().isIdentity());
+}
+
+// The covariance's softening: measured on the first kWarmUp frames, then on every kEvery-th;
+// between, the geometric mean of the last kWindow measured (a frame without a laplace
+// covariance, softening 0, measures nothing).
+TEST(SofteningMemory, MeasuresEveryFewFramesAndGivesTheMeanOfTheLast) {
+  SofteningMemory memory;
+  std::vector<double> measured;
+  int measurements = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    const double asked = memory.next();
+    if (frame < static_cast<int>(SofteningMemory::kWarmUp)) {
+      EXPECT_EQ(asked, 0.0) << "frame " << frame << " is in the warm-up";
+    }
+    if (asked == 0.0) {
+      const double value = 0.2 + 0.01 * frame;
+      measured.push_back(value);
+      ++measurements;
+      memory.record(value);
+      continue;
+    }
+    const std::size_t n = std::min(measured.size(), SofteningMemory::kWindow);
+    double log_sum = 0.0;
+    for (std::size_t i = measured.size() - n; i < measured.size(); ++i) {
+      log_sum += std::log(measured[i]);
+    }
+    EXPECT_NEAR(asked, std::exp(log_sum / static_cast<double>(n)), 1e-12) << "frame " << frame;
+    memory.record(asked);
+  }
+  // 3 warm-up measurements, then one in every kEvery frames of the other 57.
+  EXPECT_EQ(measurements, 3 + 57 / static_cast<int>(SofteningMemory::kEvery));
+  SofteningMemory none;
+  for (int frame = 0; frame < 20; ++frame) {
+    EXPECT_EQ(none.next(), 0.0);
+    none.record(0.0);  // sgld or svgd: no softening
+  }
 }
 
 // A sensor swung to and fro (turns of alternating sign) while walking steadily: the turns do not

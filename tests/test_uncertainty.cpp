@@ -171,6 +171,36 @@ TEST(Laplace, IndependentResidualsAreNotTempered) {
   EXPECT_LT(r.correlation_factor, 1.6);
 }
 
+// The secant's softening is one number: given back as UncertaintySettings::softening it gives the
+// same covariance and pose without the secant's passes; a softening half as large doubles the
+// standard deviations along the held directions (the covariance grows by its inverse square).
+TEST(Laplace, AGivenSofteningStandsInForTheMeasuredOne) {
+  const PointCloud reference = box_surface(20000, 7);
+  const PointCloud source = noisy_source(reference, kTgt, 3.0 * kNoise_m, 8);
+  SgdSettings s = uncertainty_settings(UncertaintyType::laplace, true, CostType::point_to_plane);
+  const RegistrationResult measured = align(source, reference, s);
+  ASSERT_TRUE(measured.converged) << measured.message;
+  ASSERT_GT(measured.softening, kMinSoftening);
+  ASSERT_LE(measured.softening, 1.0);
+  s.uncertainty.softening = measured.softening;
+  const RegistrationResult given = align(source, reference, s);
+  EXPECT_EQ(given.softening, measured.softening);
+  EXPECT_TRUE(given.covariance.isApprox(measured.covariance, 1e-9)) << given.covariance;
+  EXPECT_TRUE(given.T_reference_source.isApprox(measured.T_reference_source, 1e-9));
+  s.uncertainty.softening = std::max(kMinSoftening, 0.5 * measured.softening);
+  const RegistrationResult softer = align(source, reference, s);
+  const double ratio = s.uncertainty.softening / measured.softening;
+  // A box holds every direction: each variance grows by 1 / ratio^2, within the prior's share
+  // and the Newton step's different optimum.
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_NEAR(softer.covariance(k, k) / measured.covariance(k, k), 1.0 / (ratio * ratio),
+                0.1 / (ratio * ratio))
+        << "axis " << k;
+  }
+  s.uncertainty.softening = 1.5;
+  EXPECT_THROW(static_cast<void>(align(source, reference, s)), InvalidSettingsError);
+}
+
 TEST(Laplace, NoneLeavesTheCovarianceEmpty) {
   const PointCloud reference = box_points(1000, 5);
   const RegistrationResult r = align(noisy_source(reference, kTgt, kNoise_m, 6), reference);

@@ -305,6 +305,10 @@ class UncertaintySettings:
     """Block side of the sandwich estimator, a Distance in [1e-06, 10] scaled units or [1e-06,
     1000000] m. A fixed rule. Default Distance.scaled(0.1).
     """
+    softening: float
+    """laplace: the curvature's softening to use, 0 = measure it (the secant), in [0, 1]. A fixed
+    rule. Default 0.0.
+    """
 
     def __init__(self) -> None: ...
     def __eq__(self, other: object) -> bool: ...
@@ -1060,6 +1064,13 @@ class RegistrationResult:
     def correlation_factor(self) -> float:
         """With uncertainty: kappa, the factor by which the covariance of independent residuals is
         too narrow (block sandwich estimator); the likelihood is tempered by 1/kappa with temper.
+        """
+    @property
+    def softening(self) -> float:
+        """With laplace: the factor by which re-pairing softens the fixed pairs' curvature along the
+        directions the data hold (1 = not at all; measured by a secant of the re-paired gradient,
+        or given by the odometry from its recent frames); the covariance grows by its inverse
+        square.
         """
     @property
     def uncertainty_pairs(self) -> int:

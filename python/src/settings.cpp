@@ -238,6 +238,7 @@ void bind_uncertainty(py::module_& m) {
   u.def_readwrite("svgd_spread", &UncertaintySettings::svgd_spread, "");
   def_flag(u, "temper", &UncertaintySettings::temper, "");
   def_distance(u, "block_size", &UncertaintySettings::block_size, "");
+  u.def_readwrite("softening", &UncertaintySettings::softening, "");
   def_value_methods(u);
 }
 

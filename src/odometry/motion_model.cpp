@@ -1,5 +1,5 @@
 // The odometry's models of the motion between frames: the adaptive correspondence threshold and
-// the motion model (odometry.hpp).
+// the motion model, and the covariance's softening over the sequence (odometry.hpp).
 #include <cmath>
 
 #include <Eigen/Geometry>
@@ -71,6 +71,27 @@ Eigen::Matrix4d MotionModel::predicted() const {
   if (angle > 0.0) T.topLeftCorner<3, 3>() = Eigen::AngleAxisd(angle, r / angle).matrix();
   T.topRightCorner<3, 1>() = translation_carry() * last_->translation_m;
   return T;
+}
+
+// ---- the covariance's softening over the sequence
+
+double SofteningMemory::next() const {
+  if (measured_ < kWarmUp || since_measured_ + 1 >= kEvery || log_measured_.empty()) return 0.0;
+  double sum = 0.0;
+  for (const double v : log_measured_) sum += v;
+  return std::exp(sum / static_cast<double>(log_measured_.size()));
+}
+
+void SofteningMemory::record(double used) {
+  if (next() > 0.0) {  // the frame used the memory's value: nothing measured
+    ++since_measured_;
+    return;
+  }
+  since_measured_ = 0;
+  if (!(used > 0.0 && used <= 1.0)) return;  // no laplace covariance was made
+  ++measured_;
+  log_measured_.push_back(std::log(used));
+  if (log_measured_.size() > kWindow) log_measured_.erase(log_measured_.begin());
 }
 
 }  // namespace sgdicp

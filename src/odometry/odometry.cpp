@@ -362,6 +362,7 @@ RegistrationResult Odometry::align_to_map(const PointCloud& source, const Refere
       s.optimizer = with_gauss_newton_steps(s.optimizer);
     }
     if (settings_.step_within_threshold) cap_step(s, index);
+    s.uncertainty.softening = softening_.next();
     return align(source, index, s, T_guess);
   }
   BatchSettings b = batch_;
@@ -574,7 +575,10 @@ void Odometry::accept(const Attempt& a, FrameStart start, const Eigen::Matrix4d&
   if (report.doubtful) report.message += "; doubtful: " + doubt;
   report.T_first_frame = r.T_reference_source;
   // The registration's own: of the pose relative to the map, in the frame's tangent space.
-  if (with_uncertainty()) report.covariance = r.covariance_se3;
+  if (with_uncertainty()) {
+    report.covariance = r.covariance_se3;
+    softening_.record(r.softening);
+  }
   // Only registrations from the prediction sample how far it is off: a retry's start was not the
   // prediction.
   // A first pose given in a fixed map (fix_map) is the user's, not a prediction.

@@ -195,44 +195,55 @@ PoseMatrix secant_curvature(const UncertaintyProblem& p, const Blocks& blocks,
   return 0.5 * (a + a.transpose());
 }
 
-// The softening that re-pairing brings to `metric` (the Gauss-Newton matrix of the pairs held
-// fixed, plus the prior), measured by the secant `a`: one factor for every direction the data
-// constrain (where the pairs' information `jtj` outweighs the prior in the metric), the geometric
-// mean of a's eigenvalues there in that metric, each kept within [kMinSoftening, 1] (re-pairing
-// softens that curvature, it does not stiffen it). The secant of one problem's re-paired
-// gradient crosses a few pairing jumps per step, so its eigenvalues scatter (0.02-0.72 within
-// one car scan) and the inverse of a scattered curvature is biased wide, most of all in the
-// direction measured softest: per direction, the car's variance came out 4-6x the errors', one
-// factor 0.8-2.7x (docs/uncertainty.md, *Calibration*). Along a direction the data leave free
-// (a plane's slide) the secant measures nothing but noise, and the metric there is the prior's.
-PoseMatrix softened_curvature(const PoseMatrix& a, const PoseMatrix& metric,
-                              const PoseMatrix& jtj) {
-  const PoseMatrix l = Eigen::LLT<PoseMatrix>(metric).matrixL();
-  const PoseMatrix l_inverse = l.inverse();
-  const auto normalized = [&](const PoseMatrix& x) {
-    const PoseMatrix y = l_inverse * x * l_inverse.transpose();
-    return PoseMatrix(0.5 * (y + y.transpose()));
-  };
-  // The directions where the pairs' share of the metric exceeds a half.
-  const Eigen::SelfAdjointEigenSolver<PoseMatrix> share(normalized(jtj));
+// The directions the data hold in `metric` (the Gauss-Newton matrix of the pairs held fixed, plus
+// the prior): where the pairs' information `jtj` is more than half of it. Along a direction the
+// data leave free (a plane's slide) the metric is the prior's and a secant measures only noise.
+struct HeldDirections {
+  PoseMatrix l;  // metric = l l^T
+  PoseMatrix l_inverse;
+  Eigen::MatrixXd u;  // orthonormal columns in the metric's whitened space, one per direction
+};
+
+HeldDirections held_directions(const PoseMatrix& metric, const PoseMatrix& jtj) {
+  HeldDirections h;
+  h.l = Eigen::LLT<PoseMatrix>(metric).matrixL();
+  h.l_inverse = h.l.inverse();
+  const PoseMatrix y = h.l_inverse * jtj * h.l_inverse.transpose();
+  const Eigen::SelfAdjointEigenSolver<PoseMatrix> share(PoseMatrix(0.5 * (y + y.transpose())));
   std::vector<int> held;
   for (int k = 0; k < 6; ++k) {
     if (share.eigenvalues()[k] > 0.5) held.push_back(k);
   }
-  if (held.empty()) return metric;
-  Eigen::MatrixXd u(6, static_cast<Eigen::Index>(held.size()));
+  h.u.resize(6, static_cast<Eigen::Index>(held.size()));
   for (std::size_t k = 0; k < held.size(); ++k) {
-    u.col(static_cast<Eigen::Index>(k)) = share.eigenvectors().col(held[k]);
+    h.u.col(static_cast<Eigen::Index>(k)) = share.eigenvectors().col(held[k]);
   }
-  const Eigen::MatrixXd m = u.transpose() * normalized(a) * u;
+  return h;
+}
+
+// The softening that re-pairing brings to the metric, measured by the secant `a`: one factor for
+// every held direction, the geometric mean of a's eigenvalues there in the metric, each kept
+// within [kMinSoftening, 1] (re-pairing softens that curvature, it does not stiffen it). The
+// secant of one problem's re-paired gradient crosses a few pairing jumps per step, so its
+// eigenvalues scatter (0.02-0.72 within one car scan) and the inverse of a scattered curvature
+// is biased wide, most of all in the direction measured softest: per direction, the car's
+// variance came out 4-6x the errors', one factor 0.8-2.7x (docs/uncertainty.md, *Calibration*).
+double measured_softening(const PoseMatrix& a, const HeldDirections& h) {
+  if (h.u.cols() == 0) return 1.0;
+  const PoseMatrix y = h.l_inverse * a * h.l_inverse.transpose();
+  const Eigen::MatrixXd m = h.u.transpose() * PoseMatrix(0.5 * (y + y.transpose())) * h.u;
   const Eigen::VectorXd w =
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(m, Eigen::EigenvaluesOnly)
           .eigenvalues()
           .cwiseMax(kMinSoftening)
           .cwiseMin(1.0);
-  const double softening = std::exp(w.array().log().mean());
-  const PoseMatrix within = PoseMatrix::Identity() + (softening - 1.0) * u * u.transpose();
-  return l * within * l.transpose();
+  return std::exp(w.array().log().mean());
+}
+
+// The metric softened by `softening` along the held directions, unchanged along the free ones.
+PoseMatrix softened_metric(const HeldDirections& h, double softening) {
+  const PoseMatrix within = PoseMatrix::Identity() + (softening - 1.0) * h.u * h.u.transpose();
+  return h.l * within * h.l.transpose();
 }
 
 // The block sandwich of the run's own estimating equation G(theta) = 0: A^-1 S A^-1, A the
@@ -260,9 +271,10 @@ PoseVector secant_steps(PoseVector steps, const UncertaintyProblem& p) {
 }
 
 struct SandwichEstimate {
-  PoseVector theta;       // scaled: the optimum of the re-paired objective
-  PoseMatrix covariance;  // scaled theta
-  PoseMatrix a_inverse;   // the inverse secant curvature (with the prior) at theta
+  PoseVector theta;        // scaled: the optimum of the re-paired objective
+  PoseMatrix covariance;   // scaled theta
+  PoseMatrix a_inverse;    // the inverse secant curvature (with the prior) at theta
+  double softening = 1.0;  // measured by the secant, or the one given
 };
 
 // The covariance of the optimum of the re-paired objective, and that optimum: a secant at
@@ -270,17 +282,21 @@ struct SandwichEstimate {
 // scale of the error it describes), and a Newton step with it towards the optimum: the fixed
 // pairs' Gauss-Newton steps under-step there by the softening. A second secant at the scale of
 // the first estimate changed no figure of the calibration beyond its trial-to-trial spread
-// (docs/uncertainty.md), for 12 more passes over the source.
+// (docs/uncertainty.md), for 12 more passes over the source. A softening `given` (> 0) is used
+// instead of the secant's: its 12 passes are skipped (the odometry reuses its frames' own).
 SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& blocks,
                                    PoseVector theta, const FullPass& full, double sigma2,
-                                   const PoseMatrix& laplace) {
+                                   const PoseMatrix& laplace, double given) {
   PoseMatrix metric = full.jtj;
   metric.diagonal() += sigma2 * prior_information();
   const PoseMatrix prior = (sigma2 * prior_information()).asDiagonal();
   FullPass own = uses_surface_information(p) ? full_pass(p, blocks, theta, false) : full;
   const PoseVector steps = secant_steps(kSecantFirstStep * laplace.diagonal().cwiseSqrt(), p);
-  const PoseMatrix a =
-      softened_curvature(secant_curvature(p, blocks, theta, steps), metric, full.jtj) + prior;
+  const HeldDirections held = held_directions(metric, full.jtj);
+  const double softening =
+      given > 0.0 ? std::clamp(given, kMinSoftening, 1.0)
+                  : measured_softening(secant_curvature(p, blocks, theta, steps), held);
+  const PoseMatrix a = softened_metric(held, softening) + prior;
   const PoseMatrix a_inverse = a.inverse();
   PoseMatrix cov = sandwich_of(a_inverse, own, sigma2);
   // Newton's step on G, within the box the secant probed (a flat secant would send it far off
@@ -295,7 +311,7 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
     own = moved;
     cov = sandwich_of(a_inverse, own, sigma2);
   }
-  return {theta, cov, a_inverse};
+  return {theta, cov, a_inverse, softening};
 }
 
 // The source thinned on its grid shifted by `offset` (metres), in the pair's frame.
@@ -584,7 +600,9 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
   if (s.method == UncertaintyType::laplace) {
     PoseMatrix cov = post.precision.ldlt().solve(PoseMatrix::Identity());
     if (s.temper) {
-      const SandwichEstimate sandwich = sandwich_estimate(p, blocks, theta_hat, full, sigma2, cov);
+      const SandwichEstimate sandwich =
+          sandwich_estimate(p, blocks, theta_hat, full, sigma2, cov, s.softening);
+      result.softening = sandwich.softening;
       theta_hat = sandwich.theta;
       cov = sandwich.covariance + grid_covariance(p, theta_hat, sandwich.a_inverse);
     }

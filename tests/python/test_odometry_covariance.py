@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -228,3 +230,26 @@ def test_lag1_correlation_tells_a_common_map_from_a_moving_one(oc):
     assert abs(w["lag1_corr_t"]) < 0.05 and abs(w["lag1_corr_r"]) < 0.05
     # a gap (a pair left out) breaks the chain: no consecutive pairs, no correlation
     assert math.isnan(oc.lag1_correlation(common[::2])["lag1_corr_t"])
+
+
+# ---- the odometry's covariance against exact ground truth (issue 50, target 4)
+
+def test_the_odometry_covariance_holds_on_a_sequence_with_exact_truth(oc):
+    """The built sequence of the hand-held LiDAR's scans (exact relative poses), every frame, 1 cm
+    of noise: the mean NEES of each frame's relative pose against C_k + C_k-1 is in [4, 9] (6 when
+    right), and a covariance twice or half as large fails that bound, so the test can tell."""
+    data = Path(os.environ.get("SGDICP_SHARED_DATA", REPO_ROOT.parent / "shared" / "data"))
+    if not (data / "balm_handheld_lidar" / "poses.txt").exists():
+        pytest.skip("the shared hand-held LiDAR scans are not beside the repository")
+    scans, poses, _ = oc.load_handheld(data, 1, 0)
+    frames = oc.built_frames(scans, poses, voxel_m=0.02, sampling="nearest", points=0,
+                             noise_m=0.01, seed=oc.SEED)
+    est, covs, failed, _ = oc.run_odometry(frames, "sgd", "laplace", 1)
+    assert not failed.any()
+    rows = oc.pair_rows(est, poses, covs, failed)
+    assert len(rows) == len(frames) - 1
+    nees = np.mean([r["nees_sum"] for r in rows])
+    assert 4.0 <= nees <= 9.0, nees
+    for scale in (2.0, 0.5):
+        scaled = np.mean([oc.cal.nees_of(r["xi"], scale * r["C_sum"]) for r in rows])
+        assert not 4.0 <= scaled <= 9.0, (scale, scaled)

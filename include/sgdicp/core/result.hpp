@@ -100,8 +100,9 @@ struct RegistrationResult {
   Eigen::Matrix<double, 6, 1> sample_mean = Eigen::Matrix<double, 6, 1>::Zero();
   /// svgd: the modes of the particles, heaviest first (`covariance` is the first's).
   std::vector<PoseMode> modes;
-  double residual_sigma_m = 0.0;      ///< RMS of the scalar residuals at the optimum, metres
-  double correlation_factor = 0.0;    ///< kappa: naive covariance too narrow by this factor
+  double residual_sigma_m = 0.0;    ///< RMS of the scalar residuals at the optimum, metres
+  double correlation_factor = 0.0;  ///< kappa: naive covariance too narrow by this factor
+  double softening = 0.0;  ///< laplace: the fixed pairs' curvature softened by re-pairing, (0, 1]
   std::size_t uncertainty_pairs = 0;  ///< pairs of the full-data pass at the optimum
   double uncertainty_ms = 0.0;        ///< wall time of the uncertainty (inside time_ms)
 
@@ -163,6 +164,11 @@ void for_each_result_field(F&& f) {
   f("correlation_factor", &R::correlation_factor,
     "With uncertainty: kappa, the factor by which the covariance of independent residuals is too "
     "narrow (block sandwich estimator); the likelihood is tempered by 1/kappa with temper.");
+  f("softening", &R::softening,
+    "With laplace: the factor by which re-pairing softens the fixed pairs' curvature along the "
+    "directions the data hold (1 = not at all; measured by a secant of the re-paired gradient, "
+    "or given by the odometry from its recent frames); the covariance grows by its inverse "
+    "square.");
   f("uncertainty_pairs", &R::uncertainty_pairs,
     "With uncertainty: pairs of the full-data pass at the optimum.");
   f("uncertainty_ms", &R::uncertainty_ms,
