@@ -115,16 +115,14 @@ CostAccumulator surface_cost(const UncertaintyProblem& p, const std::vector<std:
   return cost;
 }
 
-// With `surface` (point-to-point only), the pairs' surface information n n^T; else the run's own
-// cost, whose gradient the run drives to zero.
+// With `surfaces` (point-to-point only), the pairs' surface information n n^T; else (nullptr) the
+// run's own cost, whose gradient the run drives to zero.
 FullPass full_pass(const UncertaintyProblem& p, const Blocks& blocks, const PoseVector& theta,
-                   bool surface) {
+                   detail::PointSurfaces* surfaces) {
   FullPass out;
-  std::optional<detail::PointSurfaces> surfaces;
-  if (surface) surfaces.emplace(*p.reference, NeighborhoodSettings{.k = kSurfaceNeighbors});
   for (const auto& block : blocks) {
-    const CostAccumulator c =
-        surface ? surface_cost(p, block, theta, *surfaces) : p.batch_cost(block, theta, true);
+    const CostAccumulator c = surfaces != nullptr ? surface_cost(p, block, theta, *surfaces)
+                                                  : p.batch_cost(block, theta, true);
     if (c.pairs() == 0) continue;
     const PoseVector g = 2.0 * c.gradient(1);
     out.jtj += 2.0 * c.hessian(1);
@@ -149,10 +147,6 @@ PoseVector run_cost_gradient(const UncertaintyProblem& p, const Blocks& blocks,
 
 bool uses_surface_information(const UncertaintyProblem& p) {
   return p.cost == CostType::point_to_point && p.reference != nullptr;
-}
-
-FullPass full_pass(const UncertaintyProblem& p, const Blocks& blocks, const PoseVector& theta) {
-  return full_pass(p, blocks, theta, uses_surface_information(p));
 }
 
 PoseVector prior_information() {
@@ -290,7 +284,7 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   PoseMatrix metric = full.jtj;
   metric.diagonal() += sigma2 * prior_information();
   const PoseMatrix prior = (sigma2 * prior_information()).asDiagonal();
-  FullPass own = uses_surface_information(p) ? full_pass(p, blocks, theta, false) : full;
+  FullPass own = uses_surface_information(p) ? full_pass(p, blocks, theta, nullptr) : full;
   const PoseVector steps = secant_steps(kSecantFirstStep * laplace.diagonal().cwiseSqrt(), p);
   const HeldDirections held = held_directions(metric, full.jtj);
   const double softening =
@@ -303,7 +297,7 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   // on a sparse cloud), taken when the pairs' mean cost does not grow and they stay.
   PoseVector step = a_inverse * own.jte;
   step *= std::min(1.0, (steps.array() / step.array().abs()).minCoeff());
-  const FullPass moved = full_pass(p, blocks, theta - step, false);
+  const FullPass moved = full_pass(p, blocks, theta - step, nullptr);
   if (step.allFinite() && moved.pairs >= own.pairs - own.pairs / 20 &&
       moved.sum_rho / static_cast<double>(std::max<std::size_t>(moved.pairs, 1)) <=
           own.sum_rho / static_cast<double>(std::max<std::size_t>(own.pairs, 1))) {
@@ -575,12 +569,19 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
   // posterior: Gauss-Newton steps on every pair bring the estimate to the full-data optimum
   // that the covariance describes (measured: docs/uncertainty.md).
   const Blocks blocks = blocks_of(*p.source, s.block_size.to_metres(p.scale_m));
-  FullPass full = full_pass(p, blocks, theta_hat);
+  // The reference's normals of the surface information, estimated on first use and kept for the
+  // polish steps' passes (point-to-point only).
+  std::optional<detail::PointSurfaces> surfaces;
+  if (uses_surface_information(p)) {
+    surfaces.emplace(*p.reference, NeighborhoodSettings{.k = kSurfaceNeighbors});
+  }
+  detail::PointSurfaces* const information = surfaces ? &*surfaces : nullptr;
+  FullPass full = full_pass(p, blocks, theta_hat, information);
   for (int step = 0; step < kPolishSteps && full.pairs > 6; ++step) {
     PoseMatrix h = full.jtj;
     h.diagonal() += 1e-9 * h.trace() * PoseVector::Ones() + 1e-12 * prior_information();
     theta_hat -= h.ldlt().solve(full.jte);
-    full = full_pass(p, blocks, theta_hat);
+    full = full_pass(p, blocks, theta_hat, information);
   }
   result.uncertainty_pairs = full.pairs;
   const auto residuals = static_cast<double>(full.pairs * residuals_per_pair(p.cost));
