@@ -170,21 +170,23 @@ double correlation_factor(const FullPass& f, double sigma2) {
   return std::isfinite(kappa) ? std::max(1.0, kappa) : 1.0;
 }
 
-// dG/dtheta by central differences of the full-data gradient G of the run's own cost, its pairs
-// found anew at every pose (run_cost_gradient), `steps` apart along each axis: the curvature of
-// the objective the run actually minimises. Where nearest neighbours change as the pose moves
-// (noisy points as dense as the noise, centroids of voxels that cut a noisy surface), it is far
-// flatter than the Gauss-Newton matrix of pairs held fixed, and the error of the optimum that
-// much larger (docs/uncertainty.md, *The methods*: laplace).
+// dG/dtheta by forward differences of the full-data gradient G of the run's own cost, its pairs
+// found anew at every pose (run_cost_gradient), `steps` along each axis from theta, where G is
+// `g_theta` (known from the covariance's own pass): the curvature of the objective the run
+// actually minimises. Where nearest neighbours change as the pose moves (noisy points as dense
+// as the noise, centroids of voxels that cut a noisy surface), it is far flatter than the
+// Gauss-Newton matrix of pairs held fixed, and the error of the optimum that much larger
+// (docs/uncertainty.md, *The methods*: laplace). Central differences, 12 passes where these take
+// 6, gave the same calibration within a few per cent on every scene and noise level
+// (docs/design.md, *The secant's forward differences*).
 PoseMatrix secant_curvature(const UncertaintyProblem& p, const Blocks& blocks,
-                            const PoseVector& theta, const PoseVector& steps) {
+                            const PoseVector& theta, const PoseVector& steps,
+                            const PoseVector& g_theta) {
   PoseMatrix a;
   for (int k = 0; k < 6; ++k) {
-    PoseVector up = theta, down = theta;
+    PoseVector up = theta;
     up[k] += steps[k];
-    down[k] -= steps[k];
-    a.col(k) =
-        (run_cost_gradient(p, blocks, up) - run_cost_gradient(p, blocks, down)) / (2.0 * steps[k]);
+    a.col(k) = (run_cost_gradient(p, blocks, up) - g_theta) / steps[k];
   }
   return 0.5 * (a + a.transpose());
 }
@@ -276,8 +278,8 @@ struct SandwichEstimate {
 // scale of the error it describes), and a Newton step with it towards the optimum: the fixed
 // pairs' Gauss-Newton steps under-step there by the softening. A second secant at the scale of
 // the first estimate changed no figure of the calibration beyond its trial-to-trial spread
-// (docs/uncertainty.md), for 12 more passes over the source. A softening `given` (> 0) is used
-// instead of the secant's: its 12 passes are skipped (the odometry reuses its frames' own).
+// (docs/uncertainty.md), for 6 more passes over the source. A softening `given` (> 0) is used
+// instead of the secant's: its 6 passes are skipped (the odometry reuses its frames' own).
 SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& blocks,
                                    PoseVector theta, const FullPass& full, double sigma2,
                                    const PoseMatrix& laplace, double given) {
@@ -289,7 +291,7 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   const HeldDirections held = held_directions(metric, full.jtj);
   const double softening =
       given > 0.0 ? std::clamp(given, kMinSoftening, 1.0)
-                  : measured_softening(secant_curvature(p, blocks, theta, steps), held);
+                  : measured_softening(secant_curvature(p, blocks, theta, steps, own.jte), held);
   const PoseMatrix a = softened_metric(held, softening) + prior;
   const PoseMatrix a_inverse = a.inverse();
   PoseMatrix cov = sandwich_of(a_inverse, own, sigma2);

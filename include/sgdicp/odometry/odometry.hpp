@@ -152,7 +152,7 @@ class AdaptiveThreshold {
 };
 
 /// The laplace covariance's softening (RegistrationResult::softening) over a sequence: measured by
-/// its secant (12 passes over the frame, the bulk of the covariance's cost) on the first
+/// its secant (6 passes over the frame, the bulk of the covariance's cost) on the first
 /// kWarmUp frames and then on every kEvery-th, and between those the geometric mean of the last
 /// kWindow measured. On the shared sequences the mean of the previous eight predicts a frame's
 /// own measurement within 5 % (hand-held LiDAR) and 11 % (7-Scenes) in the median, about the

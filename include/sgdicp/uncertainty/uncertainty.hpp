@@ -90,7 +90,7 @@ struct UncertaintySettings {
   /// Side of the blocks of the sandwich estimator (about the correlation length of residuals).
   Distance block_size = Distance::scaled(0.1);
   /// laplace: the softening of the fixed pairs' curvature by re-pairing (RegistrationResult::
-  /// softening). 0: measured by the secant (12 passes over the source); in [kMinSoftening, 1]:
+  /// softening). 0: measured by the secant (6 passes over the source); in [kMinSoftening, 1]:
   /// this one, the secant skipped (the odometry passes the mean of its recent frames').
   double softening = 0.0;
 
