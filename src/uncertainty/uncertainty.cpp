@@ -295,8 +295,9 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   const PoseMatrix a = softened_metric(held, softening) + prior;
   const PoseMatrix a_inverse = a.inverse();
   PoseMatrix cov = sandwich_of(a_inverse, own, sigma2);
-  // Newton's step on G, within the box the secant probed (a flat secant would send it far off
-  // on a sparse cloud), taken when the pairs' mean cost does not grow and they stay.
+  // Newton's step on G, within the secant's steps along each axis, either way (a flat secant
+  // would send it far off on a sparse cloud), taken when the pairs' mean cost does not grow and
+  // they stay.
   PoseVector step = a_inverse * own.jte;
   step *= std::min(1.0, (steps.array() / step.array().abs()).minCoeff());
   const FullPass moved = full_pass(p, blocks, theta - step, nullptr);
