@@ -106,11 +106,11 @@ TEST(MotionModel, ASteadyMotionIsPredictedAsItIs) {
 }
 
 // The covariance's softening: measured on the first kWarmUp frames, then on every kEvery-th;
-// between, the geometric mean of the last kWindow measured (a frame without a laplace
-// covariance, softening 0, measures nothing).
-TEST(SofteningMemory, MeasuresEveryFewFramesAndGivesTheMeanOfTheLast) {
+// between, the last one measured, so that a softening drifting as the map fills is followed (a
+// frame without a laplace covariance, softening 0, measures nothing).
+TEST(SofteningMemory, MeasuresEveryFewFramesAndGivesTheLastMeasured) {
   SofteningMemory memory;
-  std::vector<double> measured;
+  double last = 0.0;
   int measurements = 0;
   for (int frame = 0; frame < 60; ++frame) {
     const double asked = memory.next();
@@ -118,18 +118,12 @@ TEST(SofteningMemory, MeasuresEveryFewFramesAndGivesTheMeanOfTheLast) {
       EXPECT_EQ(asked, 0.0) << "frame " << frame << " is in the warm-up";
     }
     if (asked == 0.0) {
-      const double value = 0.2 + 0.01 * frame;
-      measured.push_back(value);
+      last = 0.8 - 0.01 * frame;  // drifting, as along a sequence
       ++measurements;
-      memory.record(value);
+      memory.record(last);
       continue;
     }
-    const std::size_t n = std::min(measured.size(), SofteningMemory::kWindow);
-    double log_sum = 0.0;
-    for (std::size_t i = measured.size() - n; i < measured.size(); ++i) {
-      log_sum += std::log(measured[i]);
-    }
-    EXPECT_NEAR(asked, std::exp(log_sum / static_cast<double>(n)), 1e-12) << "frame " << frame;
+    EXPECT_EQ(asked, last) << "frame " << frame;
     memory.record(asked);
   }
   // 3 warm-up measurements, then one in every kEvery frames of the other 57.
@@ -491,6 +485,27 @@ TEST(Odometry, EveryRegisteredFrameCarriesTheCovarianceOfItsPose) {
   EXPECT_FALSE(r[4].covariance == r[5].covariance);  // each frame its own
   odometry.skip_frame("unreadable");
   EXPECT_TRUE(all_nan(odometry.reports().back().covariance));
+}
+
+// A softening the user gives (UncertaintySettings::softening) is used on every frame, in place of
+// the sequence's own: half of it about quadruples every frame's covariance.
+TEST(Odometry, ASofteningTheUserGivesIsKept) {
+  const auto seq = test::synthetic_sequence(6, 0.4, 1.0, 12, 6000);
+  std::vector<double> traces[2];
+  for (const double given : {0.6, 0.3}) {
+    SgdSettings s = with_laplace();
+    s.uncertainty.softening = given;
+    Odometry odometry({}, "sgd", s);
+    for (const auto& f : seq.frames) odometry.register_frame(f);
+    for (const FrameReport& r : odometry.reports()) {
+      if (r.index > 0) traces[given < 0.5 ? 1 : 0].push_back(r.covariance.trace());
+    }
+  }
+  ASSERT_EQ(traces[0].size(), 5U);
+  ASSERT_EQ(traces[1].size(), 5U);
+  for (std::size_t k = 0; k < traces[0].size(); ++k) {
+    EXPECT_NEAR(traces[1][k] / traces[0][k], 4.0, 1.0) << "frame " << k + 1;
+  }
 }
 
 // Without an uncertainty nothing is estimated: every frame's covariance is NaN, the first too.

@@ -199,6 +199,8 @@ TEST(Laplace, AGivenSofteningStandsInForTheMeasuredOne) {
   }
   s.uncertainty.softening = 1.5;
   EXPECT_THROW(static_cast<void>(align(source, reference, s)), InvalidSettingsError);
+  s.uncertainty.softening = 0.05;  // below any the secant reports: refused, not raised to 0.1
+  EXPECT_THROW(static_cast<void>(align(source, reference, s)), InvalidSettingsError);
 }
 
 TEST(Laplace, NoneLeavesTheCovarianceEmpty) {

@@ -306,8 +306,8 @@ class UncertaintySettings:
     1000000] m. A fixed rule. Default Distance.scaled(0.1).
     """
     softening: float
-    """laplace: the curvature's softening to use, 0 = measure it (the secant), in [0, 1]. A fixed
-    rule. Default 0.0.
+    """laplace: the curvature's softening to use, 0 = measure it (the secant); (0, 0.1) refused, in
+    [0, 1]. A fixed rule. Default 0.0.
     """
 
     def __init__(self) -> None: ...

@@ -76,10 +76,8 @@ Eigen::Matrix4d MotionModel::predicted() const {
 // ---- the covariance's softening over the sequence
 
 double SofteningMemory::next() const {
-  if (measured_ < kWarmUp || since_measured_ + 1 >= kEvery || log_measured_.empty()) return 0.0;
-  double sum = 0.0;
-  for (const double v : log_measured_) sum += v;
-  return std::exp(sum / static_cast<double>(log_measured_.size()));
+  if (measured_ < kWarmUp || since_measured_ + 1 >= kEvery) return 0.0;
+  return last_measured_;
 }
 
 void SofteningMemory::record(double used) {
@@ -90,8 +88,7 @@ void SofteningMemory::record(double used) {
   since_measured_ = 0;
   if (!(used > 0.0 && used <= 1.0)) return;  // no laplace covariance was made
   ++measured_;
-  log_measured_.push_back(std::log(used));
-  if (log_measured_.size() > kWindow) log_measured_.erase(log_measured_.begin());
+  last_measured_ = used;
 }
 
 }  // namespace sgdicp

@@ -362,7 +362,8 @@ RegistrationResult Odometry::align_to_map(const PointCloud& source, const Refere
       s.optimizer = with_gauss_newton_steps(s.optimizer);
     }
     if (settings_.step_within_threshold) cap_step(s, index);
-    s.uncertainty.softening = softening_.next();
+    // A softening the user gave is kept; otherwise the sequence's (SofteningMemory).
+    if (s.uncertainty.softening == 0.0) s.uncertainty.softening = softening_.next();
     return align(source, index, s, T_guess);
   }
   BatchSettings b = batch_;

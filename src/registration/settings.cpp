@@ -9,6 +9,7 @@
 #include "registration/setting_rows.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/threads.hpp"
+#include "sgdicp/uncertainty/uncertainty.hpp"
 
 namespace sgdicp {
 
@@ -182,6 +183,12 @@ void SgdSettings::validate(SettingNames names) const {
   detail::check_table(*this, sgd_settings_table(), names);
   detail::check_table(*this, sgd_fixed_rules_table(), SettingNames::field);
   neighborhood.validate();  // epsilon and the viewpoint are not in the table
+  // The secant never reports a softening below kMinSoftening: a smaller one is no value it uses.
+  if (uncertainty.softening > 0.0 && uncertainty.softening < kMinSoftening) {
+    throw InvalidSettingsError("uncertainty.softening = " + format_number(uncertainty.softening) +
+                               ": must be 0 (measure it) or in [" + format_number(kMinSoftening) +
+                               ", 1]");
+  }
   const double pairs =
       static_cast<double>(sampling.batch_size) * static_cast<double>(convergence.window);
   if (pairs > kMaxWindowPairs) {

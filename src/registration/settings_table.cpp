@@ -324,12 +324,12 @@ std::vector<Setting<S>> make_fixed_rules_table() {
       setting<S, &S::uncertainty, &U::block_size>({"uncertainty.block_size",
                                                    "uncertainty.block_size", kScaledRange, "",
                                                    "Block side of the sandwich estimator"}),
-      setting<S, &S::uncertainty, &U::softening>(
-          {"uncertainty.softening",
-           "uncertainty.softening",
-           {0.0, 1.0},
-           "",
-           "laplace: the curvature's softening to use, 0 = measure it (the secant)"}),
+      setting<S, &S::uncertainty, &U::softening>({"uncertainty.softening",
+                                                  "uncertainty.softening",
+                                                  {0.0, 1.0},
+                                                  "",
+                                                  "laplace: the curvature's softening to use, 0 = "
+                                                  "measure it (the secant); (0, 0.1) refused"}),
   };
 }
 

@@ -290,7 +290,7 @@ SandwichEstimate sandwich_estimate(const UncertaintyProblem& p, const Blocks& bl
   const PoseVector steps = secant_steps(kSecantFirstStep * laplace.diagonal().cwiseSqrt(), p);
   const HeldDirections held = held_directions(metric, full.jtj);
   const double softening =
-      given > 0.0 ? std::clamp(given, kMinSoftening, 1.0)
+      given > 0.0 ? given  // in [kMinSoftening, 1] (SgdSettings::validate)
                   : measured_softening(secant_curvature(p, blocks, theta, steps, own.jte), held);
   const PoseMatrix a = softened_metric(held, softening) + prior;
   const PoseMatrix a_inverse = a.inverse();
