@@ -232,11 +232,12 @@ MethodRun run_method(const MethodSpec& m, const PointCloud& source, const PointC
     small_reference = random_downsample_ratio(reference, *m.random_ratio, m.sgd.sampling.seed);
   }
   const PointCloud& src = small_source ? *small_source : source;
-  PointCloud ref = small_reference ? std::move(*small_reference) : reference;
+  const PointCloud& ref = small_reference ? *small_reference : reference;
   // The reference on the settings' voxel grid, with its KD-tree; a batch method also needs every
-  // reference normal or covariance beforehand (align() estimates those of the pairs it uses).
-  ReferenceIndex index = m.stochastic ? reference_index_for(std::move(ref), m.sgd)
-                                      : reference_index_for(std::move(ref), m.batch);
+  // reference normal or covariance beforehand (align() estimates those of the pairs it uses). A
+  // reference on a grid is only read, not copied.
+  ReferenceIndex index =
+      m.stochastic ? reference_index_for(ref, m.sgd) : reference_index_for(ref, m.batch);
   MethodRun run;
   run.prepare_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -5,11 +5,13 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <Eigen/Geometry>
 
+#include "core/checks.hpp"
 #include "sgdicp/core/error.hpp"
 #include "sgdicp/core/point_cloud.hpp"
 #include "sgdicp/points/scaling.hpp"
@@ -103,6 +105,39 @@ TEST(BoundingBox, OfEqualsThePointByPointBox) {
     EXPECT_EQ(box.min, expected.min) << n << " points";
     EXPECT_EQ(box.max, expected.max) << n << " points";
     EXPECT_EQ(box.valid(), n > 0);
+  }
+}
+
+// extent_of gives BoundingBox::of and largest_coordinate from one pass, and a non-finite point,
+// in the twelve-float lanes or in the tail, anywhere and of any kind, is refused by its index.
+TEST(CloudExtent, IsTheBoxAndTheLargestAndRefusesANonFinitePoint) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> coordinate(-50.0f, 30.0f);
+  for (std::size_t n = 0; n <= 17; ++n) {
+    PointCloud cloud;
+    for (std::size_t i = 0; i < n; ++i) {
+      cloud.points.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng));
+    }
+    const sgdicp::detail::CloudExtent extent = sgdicp::detail::extent_of(cloud);
+    const BoundingBox box = BoundingBox::of(cloud);
+    EXPECT_EQ(extent.box.min, box.min) << n << " points";
+    EXPECT_EQ(extent.box.max, box.max) << n << " points";
+    EXPECT_EQ(extent.largest, sgdicp::detail::largest_coordinate(cloud)) << n << " points";
+    for (std::size_t i = 0; i < n; ++i) {
+      for (const float bad :
+           {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+            -std::numeric_limits<float>::infinity()}) {
+        PointCloud broken = cloud;
+        broken.points[i][static_cast<Eigen::Index>(i % 3)] = bad;
+        try {
+          (void)sgdicp::detail::extent_of(broken, "source cloud");
+          ADD_FAILURE() << n << " points, " << bad << " at " << i << " accepted";
+        } catch (const sgdicp::InvalidInputError& e) {
+          EXPECT_EQ(std::string(e.what()),
+                    "source cloud has a non-finite point at index " + std::to_string(i));
+        }
+      }
+    }
   }
 }
 

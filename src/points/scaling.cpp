@@ -42,20 +42,23 @@ BoundingBox percentile_box(const PointCloud& cloud) {
 }  // namespace
 
 ScalingBox bulk_bounding_box(const PointCloud& cloud) {
+  return bulk_bounding_box(cloud, BoundingBox::of(cloud));
+}
+
+ScalingBox bulk_bounding_box(const PointCloud& cloud, const BoundingBox& whole) {
   ScalingBox result;
   if (cloud.empty()) return result;
   const BoundingBox bulk = percentile_box(cloud);
   const double bulk_size = (bulk.max - bulk.min).maxCoeff();
   if (!(bulk_size > 0.0)) {  // the bulk is one point: no size to measure "far" by
-    result.box = BoundingBox::of(cloud);
+    result.box = whole;
     return result;
   }
   const double margin = kMarginInBulkSizes * bulk_size;
   const Eigen::Vector3d low = bulk.min.array() - margin;
   const Eigen::Vector3d high = bulk.max.array() + margin;
-  // Most clouds have no far point: their whole box, one vectorised pass, is the answer (the
-  // per-point test below was 3 % of a registration on a Kinect frame).
-  const BoundingBox whole = BoundingBox::of(cloud);
+  // Most clouds have no far point: their whole box is the answer (the per-point test below was
+  // 3 % of a registration on a Kinect frame).
   if ((whole.min.array() >= low.array()).all() && (whole.max.array() <= high.array()).all()) {
     result.box = whole;
     return result;

@@ -378,8 +378,9 @@ VoxelTable<Counted> recorded_table(const PointCloud& cloud, const VoxelGrid& gri
 // any thread count.
 template <class Voxel>
 VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
-                                    std::size_t threads) {
-  const VoxelGrid grid(voxel_size_m, largest_coordinate(cloud));
+                                    std::size_t threads, const char* what) {
+  const CloudExtent extent = extent_of(cloud, what);
+  const VoxelGrid grid(voxel_size_m, extent.largest);
   const std::size_t n = cloud.size();
   constexpr std::size_t kNoLimit = std::numeric_limits<std::size_t>::max();
   if (n < kMinPointsToSplit || n > std::numeric_limits<std::uint32_t>::max()) {
@@ -389,7 +390,7 @@ VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m
     return accumulate_counted<Voxel>(
         cloud, voxel_table<Counted>(cloud, grid, n / 8, kNoLimit, true, threads), threads);
   }
-  if (const std::optional<BitmapBox> bitmap = bitmap_box(cloud, grid, BoundingBox::of(cloud))) {
+  if (const std::optional<BitmapBox> bitmap = bitmap_box(cloud, grid, extent.box)) {
     return accumulate_counted<Voxel>(cloud, ranked_table(cloud, grid, *bitmap, kNoLimit), threads);
   }
   return voxel_table<Voxel>(cloud, grid, n / 8, kNoLimit, false, threads);
@@ -404,16 +405,16 @@ double search_voxel_size(const PointCloud& cloud, std::size_t target_points, std
                          std::optional<VoxelTable<Counted>>* settled) {
   if (settled != nullptr) settled->reset();
   if (target_points == 0 || cloud.size() <= target_points) return 0.0;
-  const float largest = largest_coordinate(cloud);
+  const CloudExtent extent = extent_of(cloud);  // every point's, for the bitmaps
   // Occupied voxels fall as a power of the size, N(v) ~ v^-a: a ~ 2 on surfaces (every sensor's
   // clouds), ~3 in volumes, ~1 on lines. Start from a surface filling the bulk box's diagonal
   // square, then take secant steps in log-log space with the slope measured by the last two.
-  const BoundingBox& box = bulk_bounding_box(cloud).box;
+  const BoundingBox box = bulk_bounding_box(cloud, extent.box).box;
   const double diagonal = (box.max - box.min).cast<double>().norm();
   if (!(diagonal > 0.0)) return 0.0;  // all points in one place: nothing to thin
   // A grid fine enough for the bulk cannot index a point 1e20 times farther out (a spurious
   // return robust scaling leaves out): such a cloud is used as it is.
-  const double finest = static_cast<double>(largest) / (kMaxVoxelIndex / 4.0);
+  const double finest = static_cast<double>(extent.largest) / (kMaxVoxelIndex / 4.0);
   if (diagonal / std::sqrt(static_cast<double>(target_points)) / 1e3 < finest) return 0.0;
   const auto target = static_cast<double>(target_points);
   const std::size_t limit = 8 * target_points;  // a count above says "far too small"
@@ -423,23 +424,22 @@ double search_voxel_size(const PointCloud& cloud, std::size_t target_points, std
   double slope = 2.0;
   // Each point's slot is kept as 32 bits: a larger cloud is counted, not reused.
   const bool keep = settled != nullptr && cloud.size() <= std::numeric_limits<std::uint32_t>::max();
-  const BoundingBox extent = BoundingBox::of(cloud);  // every point's, for the bitmaps
   for (int pass = 0; pass < kVoxelSearchPasses; ++pass) {
-    const VoxelGrid grid(size, largest);
+    const VoxelGrid grid(size, extent.largest);
     // The thinning needs the table of the size found, which the bitmaps do not give: a pass
     // that follows a count within a factor 2 of the target (it lands within the tolerance on
     // every cloud of the pairs files) makes it at once, the others count in a bitmap first.
     const bool near = previous_count >= 0.5 * target && previous_count <= 2.0 * target;
     std::optional<VoxelTable<Counted>> counted;
     if (keep && near) {
-      counted = recorded_table(cloud, grid, extent, target_points, limit, threads);
+      counted = recorded_table(cloud, grid, extent.box, target_points, limit, threads);
     }
     const auto count = static_cast<double>(
         counted ? (counted->over_limit ? limit + 1 : counted->keys.size())
-                : count_voxels(cloud, grid, extent, target_points, limit, threads));
+                : count_voxels(cloud, grid, extent.box, target_points, limit, threads));
     if (std::abs(count / target - 1.0) <= kVoxelCountTolerance) {
       if (keep && !counted) {
-        counted = recorded_table(cloud, grid, extent, target_points, limit, threads);
+        counted = recorded_table(cloud, grid, extent.box, target_points, limit, threads);
       }
       if (keep) *settled = std::move(counted);
       break;
@@ -487,8 +487,9 @@ VoxelTable<Voxel> accumulate(const PointCloud& cloud, double voxel_size_m, std::
                  : accumulate_voxels<Voxel>(cloud, voxel_size_m, threads);
 }
 
-template VoxelTable<Centroid> accumulate_voxels(const PointCloud&, double, std::size_t);
-template VoxelTable<Moments> accumulate_voxels(const PointCloud&, double, std::size_t);
+template VoxelTable<Centroid> accumulate_voxels(const PointCloud&, double, std::size_t,
+                                                const char*);
+template VoxelTable<Moments> accumulate_voxels(const PointCloud&, double, std::size_t, const char*);
 template VoxelTable<Centroid> accumulate(const PointCloud&, double, std::size_t,
                                          std::optional<VoxelTable<Counted>>&);
 template VoxelTable<Moments> accumulate(const PointCloud&, double, std::size_t,
@@ -517,17 +518,21 @@ std::vector<float> voxel_mean_times(const PointCloud& cloud, double voxel_size_m
 
 }  // namespace
 
+PointCloud detail::thinned(const PointCloud& cloud, double voxel_size_m, std::size_t threads,
+                           const char* what) {
+  PointCloud out = centroids_of(
+      accumulate_voxels<Centroid>(cloud, voxel_size_m, threads, what).voxels, cloud.origin_m);
+  if (cloud.has_times()) out.times_s = voxel_mean_times(cloud, voxel_size_m);
+  return out;
+}
+
 PointCloud voxel_downsample(const PointCloud& cloud, double voxel_size_m, std::size_t num_threads) {
   if (num_threads > kMaxThreads) {
     throw InvalidSettingsError("voxel_downsample: num_threads must be at most " +
                                std::to_string(kMaxThreads) + " (0 = all cores), got " +
                                std::to_string(num_threads));
   }
-  PointCloud out = detail::centroids_of(
-      detail::accumulate_voxels<detail::Centroid>(cloud, voxel_size_m, num_threads).voxels,
-      cloud.origin_m);
-  if (cloud.has_times()) out.times_s = voxel_mean_times(cloud, voxel_size_m);
-  return out;
+  return detail::thinned(cloud, voxel_size_m, num_threads, "cloud");
 }
 
 double voxel_size_for_count(const PointCloud& cloud, std::size_t target_points) {

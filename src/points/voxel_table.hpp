@@ -245,10 +245,15 @@ PointCloud centroids_of(const RecycledVector<Voxel>& voxels, const Eigen::Vector
 [[nodiscard]] double& counting_share();
 
 /// The voxels of a cloud with their sums (Centroid or Moments), on up to `threads` threads; the
-/// same table for any thread count.
+/// same table for any thread count. InvalidInputError "`what` has a non-finite point at index i".
 template <class Voxel>
 VoxelTable<Voxel> accumulate_voxels(const PointCloud& cloud, double voxel_size_m,
-                                    std::size_t threads);
+                                    std::size_t threads, const char* what = "cloud");
+
+/// voxel_downsample, its error naming the cloud `what`: a caller that thins a cloud it has not
+/// checked needs no pass of its own over it for non-finite points.
+[[nodiscard]] PointCloud thinned(const PointCloud& cloud, double voxel_size_m, std::size_t threads,
+                                 const char* what);
 
 /// The grid a registration thins `cloud` with (registration_voxel_size, voxel_grid.hpp), on up
 /// to `threads` threads; `settled` (if not null) receives the size search's counting pass of the

@@ -352,7 +352,11 @@ RegistrationResult align_batch(const PointCloud& source, const PointCloud& refer
   return align_batch(source, reference_index_for(reference, settings), settings, T_init);
 }
 
-ReferenceIndex reference_index_for(PointCloud reference, const BatchSettings& settings) {
+ReferenceIndex reference_index_for(const PointCloud& reference, const BatchSettings& settings) {
+  return detail::index_for(reference, settings, detail::SurfaceEstimation::eager);
+}
+
+ReferenceIndex reference_index_for(PointCloud&& reference, const BatchSettings& settings) {
   return detail::index_for(std::move(reference), settings, detail::SurfaceEstimation::eager);
 }
 

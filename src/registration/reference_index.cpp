@@ -110,15 +110,19 @@ ReferenceIndex with_block_surfaces(const VoxelTable<Moments>& table, PointCloud 
 
 }  // namespace
 
-ReferenceIndex registration_index(PointCloud cloud, const DownsamplingSettings& downsampling,
-                                  const NeighborhoodSettings& settings, bool surfaces,
-                                  const KdTreeSettings& tree) {
+namespace {
+
+// registration_index's, or nullopt when the cloud is to be used as it is.
+std::optional<ReferenceIndex> index_on_grid(const PointCloud& cloud,
+                                            const DownsamplingSettings& downsampling,
+                                            const NeighborhoodSettings& settings, bool surfaces,
+                                            const KdTreeSettings& tree) {
   double voxel_size_m = downsampling.voxel_size_m;
   const std::size_t downsample_to = downsampling.downsample_to;
   const bool grid_from_data = voxel_size_m == 0.0 && downsample_to > 0;
   std::optional<VoxelTable<Counted>> settled;
   voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, settings.num_threads, &settled);
-  if (voxel_size_m == 0.0) return ReferenceIndex(std::move(cloud), tree);
+  if (voxel_size_m == 0.0) return std::nullopt;
   if (!surfaces) {
     const auto table = accumulate<Centroid>(cloud, voxel_size_m, settings.num_threads, settled);
     return ReferenceIndex::on_voxel_grid(centroids_of(table.voxels, cloud.origin_m), voxel_size_m,
@@ -134,6 +138,24 @@ ReferenceIndex registration_index(PointCloud cloud, const DownsamplingSettings& 
   }
   return with_block_surfaces(table, std::move(centroids), voxel_size_m,
                              in_stored_frame(settings, cloud), grid_from_data, tree);
+}
+
+}  // namespace
+
+ReferenceIndex registration_index(const PointCloud& cloud, const DownsamplingSettings& downsampling,
+                                  const NeighborhoodSettings& settings, bool surfaces,
+                                  const KdTreeSettings& tree) {
+  std::optional<ReferenceIndex> index =
+      index_on_grid(cloud, downsampling, settings, surfaces, tree);
+  return index ? std::move(*index) : ReferenceIndex(PointCloud(cloud), tree);
+}
+
+ReferenceIndex registration_index(PointCloud&& cloud, const DownsamplingSettings& downsampling,
+                                  const NeighborhoodSettings& settings, bool surfaces,
+                                  const KdTreeSettings& tree) {
+  std::optional<ReferenceIndex> index =
+      index_on_grid(cloud, downsampling, settings, surfaces, tree);
+  return index ? std::move(*index) : ReferenceIndex(std::move(cloud), tree);
 }
 
 }  // namespace sgdicp::detail

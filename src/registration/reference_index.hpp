@@ -16,8 +16,14 @@ namespace sgdicp::detail {
 /// occupied voxel (a 3x3 patch of voxels across a surface then holds about k), each centroid's
 /// normal and covariance from the points of its 3x3x3 block (voxel_downsample_with_surfaces);
 /// otherwise the centroids alone, whose surfaces come from their k nearest centroids
-/// (PointSurfaces). `tree`: the KD-tree's settings (its voxel_size_m must be 0).
-[[nodiscard]] ReferenceIndex registration_index(PointCloud cloud,
+/// (PointSurfaces). `tree`: the KD-tree's settings (its voxel_size_m must be 0). A cloud on a grid
+/// is only read: it is copied only to be used as it is.
+[[nodiscard]] ReferenceIndex registration_index(const PointCloud& cloud,
+                                                const DownsamplingSettings& downsampling,
+                                                const NeighborhoodSettings& settings, bool surfaces,
+                                                const KdTreeSettings& tree);
+/// The same, moving the cloud into the index when it is used as it is.
+[[nodiscard]] ReferenceIndex registration_index(PointCloud&& cloud,
                                                 const DownsamplingSettings& downsampling,
                                                 const NeighborhoodSettings& settings, bool surfaces,
                                                 const KdTreeSettings& tree);

@@ -520,8 +520,12 @@ RegistrationResult align(const PointCloud& source, const PointCloud& reference,
   return align(source, reference_index_for(reference, settings), settings, T_init);
 }
 
-ReferenceIndex reference_index_for(PointCloud reference, const SgdSettings& settings) {
-  // The normals and covariances the cost needs are estimated in the run, for the pairs it uses.
+// The normals and covariances the cost needs are estimated in the run, for the pairs it uses.
+ReferenceIndex reference_index_for(const PointCloud& reference, const SgdSettings& settings) {
+  return detail::index_for(reference, settings, detail::SurfaceEstimation::lazy);
+}
+
+ReferenceIndex reference_index_for(PointCloud&& reference, const SgdSettings& settings) {
   return detail::index_for(std::move(reference), settings, detail::SurfaceEstimation::lazy);
 }
 

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "core/checks.hpp"
+#include "points/voxel_table.hpp"
 #include "registration/reference_index.hpp"
 #include "sgdicp/core/point_cloud.hpp"
 #include "sgdicp/core/result.hpp"
@@ -43,9 +44,9 @@ class PreparedSource {
                  const NeighborhoodSettings& neighborhood, std::size_t min_points,
                  const std::string& why_min, SurfaceEstimation when = SurfaceEstimation::eager)
       : cloud_(&source) {
-    check_source(source, min_points, why_min);
+    check_source(source, min_points, why_min, voxel_size_m > 0.0);
     if (voxel_size_m > 0.0) {
-      copy_ = voxel_downsample(source, voxel_size_m, threads);
+      copy_ = thinned(source, voxel_size_m, threads, "source cloud");
       cloud_ = &*copy_;
       if (copy_->size() < min_points) {
         throw InvalidInputError("source cloud has " + std::to_string(copy_->size()) +
@@ -189,24 +190,24 @@ void conclude(RegistrationResult& result, const PointCloud& source, const Refere
 
 /// The index over a registration's reference (registration_index): as given, or on its grid
 /// with the surfaces of its voxel blocks when the cost reads them.
-template <typename Settings>
-[[nodiscard]] ReferenceIndex grid_index(PointCloud reference, const Settings& settings) {
+template <typename Settings, typename Cloud>
+[[nodiscard]] ReferenceIndex grid_index(Cloud&& reference, const Settings& settings) {
   const KdTreeSettings tree{.num_threads = settings.num_threads};
   NeighborhoodSettings neighborhood = settings.neighborhood;
   neighborhood.num_threads = settings.num_threads;
   const bool surfaces = needs_reference_normals(settings.cost) || needs_covariances(settings.cost);
-  return registration_index(std::move(reference), settings.downsampling, neighborhood, surfaces,
-                            tree);
+  return registration_index(std::forward<Cloud>(reference), settings.downsampling, neighborhood,
+                            surfaces, tree);
 }
 
 /// The index of a reference given as a cloud (reference_index_for, the convenience overloads of
 /// align() and align_batch()): on the settings' voxel grid, with what the cost needs unless the
 /// solver estimates it on first use.
-template <typename Settings>
-[[nodiscard]] ReferenceIndex index_for(PointCloud reference, const Settings& settings,
+template <typename Settings, typename Cloud>
+[[nodiscard]] ReferenceIndex index_for(Cloud&& reference, const Settings& settings,
                                        SurfaceEstimation when) {
   settings.validate();
-  ReferenceIndex index = grid_index(std::move(reference), settings);
+  ReferenceIndex index = grid_index(std::forward<Cloud>(reference), settings);
   if (when == SurfaceEstimation::eager) {
     prepare_reference(index, settings.cost, settings.neighborhood);
   } else if (settings.num_threads != 1) {

@@ -45,6 +45,8 @@ struct ScalingBox {
 /// points spread over the cloud) and the bulk size its largest side, within two bulk sizes. A cloud
 /// without far points gets its exact bounding box (docs/design.md, "Robust scaling").
 [[nodiscard]] ScalingBox bulk_bounding_box(const PointCloud& cloud);
+/// The same, given the cloud's whole box (BoundingBox::of), which a caller may have already.
+[[nodiscard]] ScalingBox bulk_bounding_box(const PointCloud& cloud, const BoundingBox& whole);
 
 class UnitCubeScaling {
  public:

@@ -34,8 +34,12 @@ namespace sgdicp {
 
 /// The index align_batch(source, reference cloud, settings) builds: the reference on the
 /// settings' voxel grid (none by default), its KD-tree, and the normals or covariances the cost
-/// needs. Reuse it over many sources for the same results as passing the cloud each time.
-[[nodiscard]] ReferenceIndex reference_index_for(PointCloud reference,
+/// needs. Reuse it over many sources for the same results as passing the cloud each time. A
+/// reference used as it is (no grid, the default here) is copied, or moved in by the second
+/// overload.
+[[nodiscard]] ReferenceIndex reference_index_for(const PointCloud& reference,
+                                                 const BatchSettings& settings);
+[[nodiscard]] ReferenceIndex reference_index_for(PointCloud&& reference,
                                                  const BatchSettings& settings);
 
 }  // namespace sgdicp

@@ -27,7 +27,12 @@ namespace sgdicp {
 /// The index align(source, reference cloud, settings) builds: the reference on the settings'
 /// voxel grid (voxel_size_m, or the grid downsample_to chooses from the reference), its KD-tree
 /// built on num_threads threads. Build it once and reuse it over many sources: the results are
-/// those of passing the cloud each time. Throws InvalidInputError / InvalidSettingsError.
-[[nodiscard]] ReferenceIndex reference_index_for(PointCloud reference, const SgdSettings& settings);
+/// those of passing the cloud each time. Throws InvalidInputError / InvalidSettingsError. A
+/// reference thinned on a grid is only read; one used as it is (no grid) is copied, or moved in
+/// by the second overload.
+[[nodiscard]] ReferenceIndex reference_index_for(const PointCloud& reference,
+                                                 const SgdSettings& settings);
+[[nodiscard]] ReferenceIndex reference_index_for(PointCloud&& reference,
+                                                 const SgdSettings& settings);
 
 }  // namespace sgdicp
