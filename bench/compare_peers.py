@@ -13,7 +13,9 @@ Timed region ("time"): building the search structure + normals/covariances (+ vo
 where used) + registration, from clouds already in the library's own container. File I/O and
 the conversion of numpy arrays into a library's cloud type are excluded. sgd-icp is timed by
 its own CLI (`sgdicp bench --csv`, column time_ms = KD-tree build + align()), one process per
-registration; each Python peer in a warm worker process of its library, PCL in its C++ adapter.
+registration, warmed as the peers are by an untimed registration of the pair before it (the
+round's seed - 1); each Python peer in a warm worker process of its library after an untimed
+warm-up run, PCL in its C++ adapter the same way.
 Every method starts from the identity; peers use a maximum correspondence distance of 0.5 m and
 30 iterations; sgd-icp runs with its defaults (d_max = 0.5 *scaled* units, i.e. half the largest
 side of the joint bounding box, 60-100 m on KITTI) and, as "sgdicp_dmax0.5m", with d_max = 0.5 m

@@ -510,6 +510,26 @@ TEST(SmallSource, CapsTheMiniBatch) {
   EXPECT_LT(capped.points_processed, full.points_processed / 2);
 }
 
+// A small source is drawn many times, and the run's nearest-point memory answers most of the final
+// statistics' queries: the same values as the tree's, to the bit.
+TEST(SmallSource, FinalStatisticsFromTheRunsMemoryAreTheTrees) {
+  const Eigen::Matrix4d T_gt = make_transform(3 * kDeg, -2 * kDeg, 10 * kDeg, {0.1, -0.05, 0.05});
+  const PointCloud reference = synthetic_scene(51, 4000);
+  const PointCloud source = transformed(synthetic_scene(52, 400), T_gt.inverse());
+  const SgdSettings s;
+  const ReferenceIndex index = reference_index_for(reference, s);
+  const RegistrationResult r = align(source, index, s);
+  ASSERT_TRUE(r.converged) << r.message;
+  ASSERT_EQ(r.voxel_size_m, 0.0);  // the source as given: its point i is the run's
+  ASSERT_GT(r.points_processed, 3 * source.size());  // drawn often enough for the memory
+  RegistrationResult tree;
+  tree.T_reference_source = r.T_reference_source;
+  evaluate_alignment(source, index, r.final_max_distance_m, s.evaluation, 1, tree);
+  EXPECT_EQ(r.evaluated_points, tree.evaluated_points);
+  EXPECT_EQ(r.inliers, tree.inliers);
+  EXPECT_EQ(r.inlier_rmse_m, tree.inlier_rmse_m);
+}
+
 // Small sources take Gauss-Newton steps in the coarse stage while the optimizer is the default;
 // large sources, an optimizer set by the user and paper() keep theirs.
 TEST(SmallSource, TakesGaussNewtonStepsWithTheDefaultOptimizer) {

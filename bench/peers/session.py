@@ -3,7 +3,8 @@ on pairs, each registration in a child process with a time limit.
 
 Where each kind runs:
 - "cli": sgd-icp by its CLI (`sgdicp bench --csv`, time_ms = KD-tree build + align()), one process
-  per registration.
+  per registration, warm as the peers are: the process first registers the pair once untimed
+  (the round's seed - 1), then the timed registration (the round's seed).
 - "worker": a Python peer (small_gicp, Open3D) in a worker process of its library (worker.py),
   warm: the clouds are read once per worker and one untimed warm-up run per method precedes the
   timed runs (again after the worker was restarted).
@@ -254,14 +255,21 @@ class Session:
         # "{voxel}" in a CLI method's arguments: the pairs file's voxel size, the peers' own.
         voxel = str(self.settings.voxel_for(pair.pairs_file))
         args = [a.replace("{voxel}", voxel) for a in method.spec]
-        run = run_bench(self.sgdicp, [pair], ["--seed", str(2019 + rep)] + args,
+        # `--repeat 2` from the seed before the round's: repeat 0 warms the process (its caches,
+        # its allocator's pages) as the peers' untimed warm-up run does theirs, and repeat 1 is
+        # the round's registration (seed 2019 + rep), the one timed.
+        run = run_bench(self.sgdicp, [pair],
+                        ["--seed", str(2019 + rep - 1), "--repeat", "2"] + args,
                         self._tmp.name, self.settings.timeout_s, peak_rss=True)
         if run.status == "timeout":
             return Outcome(status="timeout", time_ms=self.settings.timeout_s * 1e3, note=run.note,
                            call_ms=run.wall_ms)
         if run.status != "ok":
             return Outcome(status=run.status, note=run.note, call_ms=run.wall_ms)
-        row = run.rows[0]
+        row = next((r for r in run.rows if r["repeat"] == "1"), None)
+        if row is None:
+            return Outcome(status="error", note="no timed row (repeat 1) in the CLI's CSV",
+                           call_ms=run.wall_ms)
         # The CSV has no T; its errors are the CLI's, by the same definitions.
         return Outcome(time_ms=float(row["time_ms"]), build_ms=float(row["build_ms"]),
                        iterations=int(row["iterations"]), converged=row["converged"] == "1",

@@ -9,6 +9,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "index/nearest_memory.hpp"
+#include "registration/solver_support.hpp"
 #include "sgdicp/core/threads.hpp"
 #include "surfaces/point_surfaces.hpp"
 #include "util/helper_thread.hpp"
@@ -62,7 +64,8 @@ struct MovedSource {
   const PointCloud& cloud;
   Eigen::Matrix3f R_reference_source;
   Eigen::Vector3f t_reference_source_m;
-  float max_sq;  // squared pair distance limit, m^2
+  float max_sq;                         // squared pair distance limit, m^2
+  const detail::NearestMemory* memory;  // the run's, or null
 
   [[nodiscard]] std::size_t size() const { return cloud.size(); }
   [[nodiscard]] Eigen::Vector3f point(std::size_t i) const {
@@ -89,8 +92,15 @@ std::vector<Pair> count_inliers(const MovedSource& source, const ReferenceIndex&
     const std::size_t count = std::min(kSampleBlock, samples - first);
     const auto query = [&](std::size_t begin, std::size_t end) {
       for (std::size_t k = begin; k < end; ++k) {
-        moved[k] = source.point(sample_index(first + k, samples, n));
-        found[k] = reference.nearest(moved[k], source.max_sq);
+        const std::size_t i = sample_index(first + k, samples, n);
+        moved[k] = source.point(i);
+        // The run's memory answers a point it certifies without the tree (a small source, drawn
+        // many times, ends near where it was last queried): the tree's answer, bit for bit.
+        detail::NearestMemory::Entry unused;
+        found[k] = source.memory != nullptr
+                       ? source.memory->nearest(static_cast<std::uint32_t>(i), moved[k],
+                                                source.max_sq, unused)
+                       : reference.nearest(moved[k], source.max_sq);
       }
     };
     if (split && count >= kMinSamplesToSplit) {
@@ -200,13 +210,21 @@ void evaluate_alignment(const PointCloud& source, const ReferenceIndex& referenc
                         double max_distance_m, const EvaluationSettings& settings,
                         std::size_t num_threads, RegistrationResult& result,
                         const ReferenceNormals& normals) {
+  detail::evaluate_alignment(source, reference, max_distance_m, settings, num_threads, result,
+                             normals, nullptr);
+}
+
+void detail::evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
+                                double max_distance_m, const EvaluationSettings& settings,
+                                std::size_t num_threads, RegistrationResult& result,
+                                const ReferenceNormals& normals, const NearestMemory* memory) {
   const std::size_t n = source.size();
   const std::size_t samples =
       settings.evaluation_points == 0 ? n : std::min(n, settings.evaluation_points);
   const MovedSource moved_source{source,
                                  result.T_reference_source.topLeftCorner<3, 3>().cast<float>(),
                                  result.T_reference_source.topRightCorner<3, 1>().cast<float>(),
-                                 static_cast<float>(max_distance_m * max_distance_m)};
+                                 static_cast<float>(max_distance_m * max_distance_m), memory};
   std::vector<Pair> pairs = count_inliers(moved_source, reference, samples, num_threads, result);
   // A small evaluation sample (evaluation_points 1, say) does not decide the geometry: the check
   // draws its own sample then.

@@ -64,6 +64,11 @@ class MiniBatchPairing {
     return reference_surfaces_.normal(i);
   }
 
+  // What the memory certifies over `index` (null: no memory, or one over another index).
+  [[nodiscard]] const detail::NearestMemory* memory_over(const ReferenceIndex& index) const {
+    return memory_ && search_ == &index ? &*memory_ : nullptr;
+  }
+
   // The index the pairs are searched in from now on: the reference, or its coarse view (one
   // point per map voxel, the same cloud) for the coarse stage (SgdRun). What the memory
   // certified for one does not hold for the other: it starts again.
@@ -378,6 +383,11 @@ class SgdRun {
     return pairing_.gradient_over(cloud, EulerPoseJacobian(theta), schedule_.max_distance());
   }
 
+  // The pairs' nearest-point memory over the reference, for the final statistics (or null).
+  [[nodiscard]] const detail::NearestMemory* nearest_memory() const {
+    return pairing_.memory_over(reference_);
+  }
+
   // The normal of reference point i, from the cloud or estimated once (as the plane costs do).
   [[nodiscard]] Eigen::Vector3f reference_normal(std::uint32_t i) {
     return pairing_.reference_normal(i);
@@ -509,8 +519,9 @@ std::optional<RegistrationResult> detail::align_unless(const PointCloud& source,
   }
   result.T_reference_source = scaling.to_metric(transform_from_pose(theta));
   // The degeneracy check reads the reference normals the run estimated (or would have).
-  detail::conclude(result, src.cloud(), reference, run.max_distance() * scaling.scale(), settings,
-                   clock, [&run](std::uint32_t i) { return run.reference_normal(i); });
+  detail::conclude(
+      result, src.cloud(), reference, run.max_distance() * scaling.scale(), settings, clock,
+      [&run](std::uint32_t i) { return run.reference_normal(i); }, run.nearest_memory());
   frame.to_clouds(result);
   return result;
 }

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "core/checks.hpp"
+#include "index/nearest_memory.hpp"
 #include "points/voxel_table.hpp"
 #include "registration/reference_index.hpp"
 #include "sgdicp/core/point_cloud.hpp"
@@ -176,15 +177,22 @@ inline void set_stop(RegistrationResult& result, StopReason reason, std::string 
   return "reached the iteration limit of " + std::to_string(max_iterations) + " before converging";
 }
 
+/// evaluate_alignment, its inlier queries answered by `memory` (over `reference` and `source`)
+/// where it certifies them: the same values, fewer searches.
+void evaluate_alignment(const PointCloud& source, const ReferenceIndex& reference,
+                        double max_distance_m, const EvaluationSettings& settings,
+                        std::size_t num_threads, RegistrationResult& result,
+                        const ReferenceNormals& normals, const NearestMemory* memory);
+
 /// Fills the final statistics of result.T_reference_source (the run's evaluation group, on its
-/// threads) and the time of the whole run.
+/// threads) and the time of the whole run; `memory` as for evaluate_alignment.
 template <typename Settings>
 void conclude(RegistrationResult& result, const PointCloud& source, const ReferenceIndex& reference,
               double max_distance_m, const Settings& settings, const Stopwatch& clock,
-              const ReferenceNormals& normals = {}) {
+              const ReferenceNormals& normals = {}, const NearestMemory* memory = nullptr) {
   result.final_max_distance_m = max_distance_m;
   evaluate_alignment(source, reference, max_distance_m, settings.evaluation, settings.num_threads,
-                     result, normals);
+                     result, normals, memory);
   result.time_ms = clock.elapsed_ms();
 }
 
