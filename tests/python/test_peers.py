@@ -142,6 +142,32 @@ def test_cli_runs_are_stopped_too(pairs_file, tmp_path):
     assert run.status == "crashed"
 
 
+def test_the_cli_is_timed_warm_after_an_untimed_registration(pairs_file, tmp_path):
+    """Our CLI runs the pair twice in one process, from the seed before the round's: only the
+    second registration (the round's seed, 2019 + rep) is timed, as the peers' warm-up run is
+    not."""
+    args_file = tmp_path / "args"
+    cli = tmp_path / "sgdicp"
+    header = ("line,repeat,time_ms,build_ms,iterations,converged,translation_error_m,"
+              "rotation_error_geodesic_deg,rotation_error_euler_rad,stop_reason")
+    cli.write_text(
+        "#!/bin/sh\n"
+        f'echo "$@" > {args_file}\n'
+        'while [ "$1" != "--csv" ]; do shift; done\n'
+        f'printf "{header}\\n1,0,100,50,9,1,0.5,5,0.1,converged\\n'
+        '1,1,7,3,9,1,0.25,2,0.05,converged\\n" > "$2"\n')
+    cli.chmod(0o755)
+    methods = {m.name: m for m in peers.build_methods(peers.PeerSettings(), str(cli), None)}
+    with peers.Session(peers.PeerSettings(timeout_s=30), sgdicp=str(cli),
+                       log=lambda msg: None) as session:
+        pair = peers.read_pairs(pairs_file)[0]
+        o = session.run(methods["sgdicp"], pair, rep=3)
+    assert o.status == "ok", o.note
+    assert o.time_ms == 7.0 and o.build_ms == 3.0 and o.translation_error_m == 0.25
+    args = args_file.read_text().split()
+    assert args[args.index("--seed") + 1] == "2021" and args[args.index("--repeat") + 1] == "2"
+
+
 def load_compare_peers():
     spec = importlib.util.spec_from_file_location("compare_peers", REPO_ROOT / "bench" / "compare_peers.py")
     module = importlib.util.module_from_spec(spec)
