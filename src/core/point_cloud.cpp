@@ -40,7 +40,7 @@ BoundingBox box_of(const PointCloud& cloud, bool& finite) {
     const auto axis = static_cast<Eigen::Index>(k % 3);
     low[axis] = std::min(low[axis], coordinates[k]);
     high[axis] = std::max(high[axis], coordinates[k]);
-    tail_zero += coordinates[k] * 0.0F;
+    if constexpr (kCheck) tail_zero += coordinates[k] * 0.0F;
   }
   if constexpr (kCheck) finite = zero.isFinite().all() && std::isfinite(tail_zero);
   BoundingBox box;  // lanes no point reached hold +-inf, which the fold leaves out
