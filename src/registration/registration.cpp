@@ -86,6 +86,12 @@ class MiniBatchPairing {
              settings_.trim_ratio >= 1.0;
   }
 
+  // Every query leaves a certificate from now on, not only from the second epoch: an uncertainty
+  // pass over every source point follows the run, near the poses its last mini-batches met.
+  void remember_from_now() {
+    if (!memory_) memory_.emplace(*search_, source_.size());
+  }
+
   // sum w J^T Omega e of the cost over every point of `cloud` (a source in the run's frame, e.g.
   // thinned on another grid), each paired by a fresh search of the reference within d_max. A cloud
   // without covariances pairs plane-to-plane by the reference normal alone.
@@ -367,6 +373,9 @@ class SgdRun {
   void begin_refinement() {
     pairing_.use_cost(settings_.cost);
     pairing_.search_in(reference_);
+    // The uncertainty's passes over the whole source (full_pass) then find 1.5x fewer pairs to
+    // search: odometry with laplace on the hand-held LiDAR 1.22M -> 0.82M searches (design.md).
+    if (settings_.uncertainty.method != UncertaintyType::none) pairing_.remember_from_now();
     const bool robust =
         settings_.pairing.kernel != KernelType::none || settings_.pairing.trim_ratio < 1.0;
     if (!settings_.refinement.gauss_newton || robust ||
