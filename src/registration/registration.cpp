@@ -86,9 +86,10 @@ class MiniBatchPairing {
              settings_.trim_ratio >= 1.0;
   }
 
-  // Every query leaves a certificate from now on, not only from the second epoch: an uncertainty
-  // pass over every source point follows the run, near the poses its last mini-batches met.
-  void remember_from_now() {
+  // Every query leaves a certificate from now on (NearestMemory): from the second epoch on its
+  // own (remember_from_now_on), from the refinement when an uncertainty pass over every source
+  // point follows the run, near the poses its last mini-batches met.
+  void start_memory() {
     if (!memory_) memory_.emplace(*search_, source_.size());
   }
 
@@ -182,7 +183,7 @@ class MiniBatchPairing {
   void remember_from_now_on(std::size_t batch_points) {
     if (memory_) return;
     queried_ += batch_points;
-    if (queried_ > source_.size()) memory_.emplace(*search_, source_.size());
+    if (queried_ > source_.size()) start_memory();
   }
 
   // The paper's pair cost without kernel or trimming: the short path of the hot loop. Kept
@@ -375,7 +376,7 @@ class SgdRun {
     pairing_.search_in(reference_);
     // The uncertainty's passes over the whole source (full_pass) then find 1.5x fewer pairs to
     // search: odometry with laplace on the hand-held LiDAR 1.22M -> 0.82M searches (design.md).
-    if (settings_.uncertainty.method != UncertaintyType::none) pairing_.remember_from_now();
+    if (settings_.uncertainty.method != UncertaintyType::none) pairing_.start_memory();
     const bool robust =
         settings_.pairing.kernel != KernelType::none || settings_.pairing.trim_ratio < 1.0;
     if (!settings_.refinement.gauss_newton || robust ||
