@@ -18,6 +18,7 @@
 #include "sgdicp/solver/optimizer.hpp"
 #include "sgdicp/solver/sampler.hpp"
 #include "surfaces/point_surfaces.hpp"
+#include "uncertainty/shrinkage.hpp"
 #include "uncertainty/stein.hpp"
 #include "util/stopwatch.hpp"
 
@@ -323,9 +324,12 @@ PointCloud thinned_on_shifted_grid(const UncertaintyProblem& p, const Eigen::Vec
 // (the 7-Scenes frame at 1 cm: 15 mm in single problems against a sandwich of 0.5 mm;
 // docs/uncertainty.md, *The grid's own error*). Thinning the source on kGridOffsets grids shifted
 // at random, each one's optimum is a Newton step away, -A^-1 G_k; the covariance of those optima
-// (the actual grid's among them) is the grid's share of the error.
+// (the actual grid's among them) is the grid's share of the error. Seven draws in 6-D give a
+// covariance whose inverse has no finite mean (the 7-Scenes frame at 3 cm: mean NEES 29, median
+// 11), so it is shrunk toward the sandwich's shape `shape` (docs/design.md, *The grid's share,
+// shrunk*).
 PoseMatrix grid_covariance(const UncertaintyProblem& p, const PoseVector& theta,
-                           const PoseMatrix& a_inverse) {
+                           const PoseMatrix& a_inverse, const PoseMatrix& shape) {
   if (p.unthinned_source == nullptr || !(p.voxel_m > 0.0) || !p.cloud_gradient) {
     return PoseMatrix::Zero();
   }
@@ -337,13 +341,7 @@ PoseMatrix grid_covariance(const UncertaintyProblem& p, const PoseVector& theta,
     const PoseVector g = p.cloud_gradient(thinned_on_shifted_grid(p, offset), theta);
     if (g.allFinite()) optima.push_back(-(a_inverse * g));
   }
-  if (optima.size() < 2) return PoseMatrix::Zero();
-  PoseVector mean = PoseVector::Zero();
-  for (const PoseVector& d : optima) mean += d;
-  mean /= static_cast<double>(optima.size());
-  PoseMatrix cov = PoseMatrix::Zero();
-  for (const PoseVector& d : optima) cov += (d - mean) * (d - mean).transpose();
-  return cov / static_cast<double>(optima.size() - 1);
+  return detail::shrunk_covariance(optima, shape);
 }
 
 // Normal deviates from a fully specified engine and Box-Muller, so that a seed gives the same
@@ -603,7 +601,8 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
           sandwich_estimate(p, blocks, theta_hat, full, sigma2, cov, s.softening);
       result.softening = sandwich.softening;
       theta_hat = sandwich.theta;
-      cov = sandwich.covariance + grid_covariance(p, theta_hat, sandwich.a_inverse);
+      cov = sandwich.covariance +
+            grid_covariance(p, theta_hat, sandwich.a_inverse, sandwich.covariance);
     }
     const PoseMatrix jm = pose_map_jacobian(p.to_reported, theta_hat);
     result.covariance = jm * cov * jm.transpose();

@@ -1,0 +1,65 @@
+#include "uncertainty/shrinkage.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+namespace sgdicp::detail {
+namespace {
+
+PoseMatrix sample_covariance(const std::vector<PoseVector>& deviations) {
+  PoseMatrix s = PoseMatrix::Zero();
+  for (const PoseVector& d : deviations) s += d * d.transpose();
+  return s / static_cast<double>(deviations.size() - 1);
+}
+
+// `m` with its translation and rotation blocks scaled to the traces of `like`'s.
+PoseMatrix with_block_traces_of(const PoseMatrix& m, const PoseMatrix& like) {
+  const auto factor = [](double want, double have) {
+    return have > 0.0 ? std::sqrt(want / have) : 0.0;
+  };
+  PoseVector d;
+  d.head<3>().setConstant(
+      factor(like.topLeftCorner<3, 3>().trace(), m.topLeftCorner<3, 3>().trace()));
+  d.tail<3>().setConstant(
+      factor(like.bottomRightCorner<3, 3>().trace(), m.bottomRightCorner<3, 3>().trace()));
+  return d.asDiagonal() * m * d.asDiagonal();
+}
+
+}  // namespace
+
+PoseMatrix shrunk_covariance(const std::vector<PoseVector>& draws, const PoseMatrix& shape) {
+  if (draws.size() < 2) return PoseMatrix::Zero();
+  PoseVector mean = PoseVector::Zero();
+  for (const PoseVector& d : draws) mean += d;
+  mean /= static_cast<double>(draws.size());
+  std::vector<PoseVector> deviations;
+  deviations.reserve(draws.size());
+  for (const PoseVector& d : draws) deviations.push_back(d - mean);
+  const PoseMatrix sample = sample_covariance(deviations);
+
+  const Eigen::LLT<PoseMatrix> llt(shape);
+  if (llt.info() != Eigen::Success || !sample.allFinite()) return sample;
+  const PoseMatrix l = llt.matrixL();
+  const PoseMatrix l_inverse = l.inverse();
+  // In the space whitened by `shape` the target is alpha I, alpha the sample's mean variance.
+  for (PoseVector& d : deviations) d = l_inverse * d;
+  const PoseMatrix whitened = sample_covariance(deviations);
+  const double alpha = whitened.trace() / 6.0;
+  const PoseMatrix target = alpha * PoseMatrix::Identity();
+  // Ledoit-Wolf: the intensity is the draws' scatter about the sample covariance (each draw's
+  // n/(n-1) d d^T is one unbiased estimate of it) over the sample's distance to the target.
+  const auto n = static_cast<double>(draws.size());
+  double scatter = 0.0;
+  for (const PoseVector& d : deviations) {
+    scatter += ((n / (n - 1.0)) * d * d.transpose() - whitened).squaredNorm();
+  }
+  const double distance = (whitened - target).squaredNorm();
+  const double intensity = distance > 0.0 ? std::min(distance, scatter / (n * n)) / distance : 1.0;
+  const PoseMatrix shrunk = intensity * target + (1.0 - intensity) * whitened;
+  return with_block_traces_of(l * shrunk * l.transpose(), sample);
+}
+
+}  // namespace sgdicp::detail
