@@ -13,14 +13,16 @@
 namespace sgdicp::detail {
 namespace {
 
-// Where a grid chosen from the data leaves single scan lines in its 3x3x3 blocks, the block
-// normal is perpendicular to the beam, not to the surface: on the hand-held spinning LiDAR
-// (BALM) the median block linearity is 0.93-0.98 and point-to-plane ends 2.6 cm / 0.183° off
-// (79 % within 5 cm and 1°). Above kLinearBlocks each centroid takes the block surface of its
-// voxel in a grid kCoarseFactor times coarser, whose blocks span several rings: BALM 0.58 cm /
-// 0.053° / 100 %, 2 ms more (23.3 -> 25.3 ms); a factor of 2 left 0.081°. The threshold sits
-// between dense LiDAR (KITTI 0.54-0.58, the car 0.54) and sparse rings (KITTI of 32 or 16 beams
-// 0.74-0.99); RGB-D and maps are at 0.31-0.33.
+// Where a registration's grid leaves single scan lines in its 3x3x3 blocks, the block normal is
+// perpendicular to the beam, not to the surface: on the hand-held spinning LiDAR (BALM) the
+// median block linearity is 0.93-0.98 and point-to-plane ends 2.6 cm / 0.183° off (79 % within
+// 5 cm and 1°). Above kLinearBlocks each centroid takes the block surface of its voxel in a grid
+// kCoarseFactor times coarser, whose blocks span several rings: BALM 0.58 cm / 0.053° / 100 %,
+// 2 ms more (23.3 -> 25.3 ms); a factor of 2 left 0.081°. The threshold sits between dense LiDAR
+// (KITTI 0.54-0.58, the car 0.54) and sparse rings (KITTI of 32 or 16 beams 0.74-0.99); RGB-D
+// and maps are at 0.31-0.33. The same holds for a grid the user gives: BALM at 0.15 m voxels
+// 3.2 cm / 0.214° / 76 % with the grid's own blocks, 0.61 cm / 0.051° / 100 % with the rule
+// (docs/preprocessing.md, *Scan lines*).
 constexpr double kLinearBlocks = 0.65;
 constexpr std::int64_t kCoarseFactor = 3;  // integer: fine voxels nest in coarse ones
 
@@ -81,14 +83,14 @@ void take_coarse_surfaces(const VoxelTable<Moments>& fine, const NeighborhoodSet
   }
 }
 
-// The index over the grid's centroids with their block surfaces (coarse ones where the grid was
-// chosen from the data and its blocks are scan lines). The tree over the centroids is built on
+// The index over the grid's centroids with their block surfaces (coarse ones where its blocks
+// are scan lines). The tree over the centroids is built on
 // one thread while the other sorts the keys and starts the sweep: neither waits for the other
 // (sort, sweep and tree on two threads 6.1 -> 4.8-5.2 ms on a KITTI scan, 6.3 -> 5.1 ms on a
 // Kinect frame).
 ReferenceIndex with_block_surfaces(const VoxelTable<Moments>& table, PointCloud centroids,
                                    double voxel_size_m, const NeighborhoodSettings& stored,
-                                   bool grid_from_data, const KdTreeSettings& tree) {
+                                   const KdTreeSettings& tree) {
   std::optional<ReferenceIndex> index;
   KdTreeSettings tree_alongside = tree;
   tree_alongside.num_threads = 1;
@@ -99,9 +101,8 @@ ReferenceIndex with_block_surfaces(const VoxelTable<Moments>& table, PointCloud 
     index.emplace(
         ReferenceIndex::on_voxel_grid(std::move(centroids), voxel_size_m, tree_alongside));
   };
-  sweep_surfaces(table, stored, stored.num_threads, normals, covariances, build_tree,
-                 grid_from_data ? &linearities : nullptr);
-  if (grid_from_data && median_above(linearities, kLinearBlocks)) {
+  sweep_surfaces(table, stored, stored.num_threads, normals, covariances, build_tree, &linearities);
+  if (median_above(linearities, kLinearBlocks)) {
     take_coarse_surfaces(table, stored, stored.num_threads, normals, covariances);
   }
   index->set_normals_and_covariances(std::move(normals), std::move(covariances));
@@ -119,7 +120,6 @@ std::optional<ReferenceIndex> index_on_grid(const PointCloud& cloud,
                                             const KdTreeSettings& tree) {
   double voxel_size_m = downsampling.voxel_size_m;
   const std::size_t downsample_to = downsampling.downsample_to;
-  const bool grid_from_data = voxel_size_m == 0.0 && downsample_to > 0;
   std::optional<VoxelTable<Counted>> settled;
   voxel_size_m = grid_size(cloud, voxel_size_m, downsample_to, settings.num_threads, &settled);
   if (voxel_size_m == 0.0) return std::nullopt;
@@ -137,7 +137,7 @@ std::optional<ReferenceIndex> index_on_grid(const PointCloud& cloud,
     return ReferenceIndex::on_voxel_grid(std::move(centroids), voxel_size_m, tree);
   }
   return with_block_surfaces(table, std::move(centroids), voxel_size_m,
-                             in_stored_frame(settings, cloud), grid_from_data, tree);
+                             in_stored_frame(settings, cloud), tree);
 }
 
 }  // namespace
