@@ -80,6 +80,10 @@ void print_uncertainty(const RegistrationResult& r) {
             << sd(4) * 180.0 / std::numbers::pi << ' ' << sd(5) * 180.0 / std::numbers::pi
             << " (correlation factor " << r.correlation_factor << ", " << r.uncertainty_ms
             << " ms)\n";
+  if (r.effective_samples > 0.0) {
+    std::cout << "sgld: " << r.samples.size() << " samples worth " << r.effective_samples
+              << " independent draws (effective sample size, slowest coordinate)\n";
+  }
   if (r.modes.size() > 1) {
     std::cout << "modes: " << r.modes.size() << " (the std is the first's), weights";
     for (const PoseMode& m : r.modes) std::cout << ' ' << m.weight;

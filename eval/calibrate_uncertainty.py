@@ -29,6 +29,7 @@ method), over the trials that did not fail:
                              common to all problems makes (no per-problem covariance can hold it)
   cost                       median wall time / median wall time of the point estimate
   kappa                      the median correlation_factor the method reports
+  ess                        sgld: the median effective_samples of its chain (slowest coordinate)
 A trial fails (it is listed, counted and left out of the statistics) when register() raises,
 when its estimate or covariance is not finite or the covariance not positive definite, or when
 its translation or rotation error is above OUTLIER_FACTOR (10) times the median of the method's
@@ -63,6 +64,7 @@ import hashlib
 import json
 import math
 import subprocess
+import sys
 import time
 import zlib
 from pathlib import Path
@@ -70,6 +72,9 @@ from pathlib import Path
 import numpy as np
 
 import sgd_icp
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from calibration_figure import draw_figure  # noqa: E402  (the figure of --figure)
 
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
@@ -384,7 +389,7 @@ def run_trial(dataset, noise_m, trial, scene, settings, args, figure_samples) ->
         P = np.array(r.covariance)
         row.update(P=P, status=trial_status(T, P), kappa=r.correlation_factor,
                    residual_sigma_m=r.residual_sigma_m, pairs=r.uncertainty_pairs,
-                   modes=len(r.modes))
+                   modes=len(r.modes), ess=r.effective_samples)
         row["nees"] = nees_of(e, P) if row["status"] == "ok" else math.nan
         if trial == 0 and len(r.samples) and figure_samples is not None:
             # The first trial's samples as errors (theta - theta_gt): a cloud around that trial's
@@ -408,6 +413,7 @@ def group_summary(rows: list[dict], base_rows: list[dict]) -> dict:
                      else math.nan)
     stats["median_ms"] = float(np.median(times)) if times else math.nan
     stats["kappa"] = float(np.median([r["kappa"] for r in valid])) if valid else math.nan
+    stats["ess"] = float(np.median([r["ess"] for r in valid if r.get("ess", 0) > 0] or [math.nan]))
     stats["trials"] = len(rows)
     stats["failed"] = len(rows) - len(valid)
     stats["why_fail"] = verdict(stats)
@@ -416,9 +422,9 @@ def group_summary(rows: list[dict], base_rows: list[dict]) -> dict:
 
 
 CSV_FIELDS = ["dataset", "noise_m", "trial", "method", "status", "nees",
-              "ex", "ey", "ez", "eroll", "epitch", "eyaw",
-              "sx", "sy", "sz", "sroll", "spitch", "syaw",
-              "kappa", "residual_sigma_m", "pairs", "modes", "converged", "time_ms", "setup_ms"]
+              "ex", "ey", "ez", "eroll", "epitch", "eyaw", "sx", "sy", "sz", "sroll", "spitch",
+              "syaw", "kappa", "ess", "residual_sigma_m", "pairs", "modes", "converged",
+              "time_ms", "setup_ms"]
 
 
 def csv_row(r: dict) -> dict:
@@ -452,8 +458,8 @@ def report(groups: list[dict], failed_rows: list[dict], args, wall_s: float, ide
         "",
         "| dataset | noise (m) | method | trials (failed) | var ratio t | var ratio r | mean NEES "
         "| median NEES | 1-sigma cov. (68 %) | 2-sigma cov. (95 %) | bias t | bias r | cost | "
-        "kappa | target |",
-        "|" + " --- |" * 15,
+        "kappa | ess | target |",
+        "|" + " --- |" * 16,
     ]
     for g in groups:
         lines.append(
@@ -462,7 +468,7 @@ def report(groups: list[dict], failed_rows: list[dict], args, wall_s: float, ide
             f"| {fmt(g['mean_nees'], '.3g')} | {fmt(g['median_nees'], '.3g')} | "
             f"{fmt(g['coverage_1sigma'], '.0%')} | {fmt(g['coverage_2sigma'], '.0%')} | "
             f"{fmt(g['bias_share_t'], '.0%')} | {fmt(g['bias_share_r'], '.0%')} | "
-            f"{fmt(g['cost'], '.1f')}x | {fmt(g['kappa'], '.3g')} | "
+            f"{fmt(g['cost'], '.1f')}x | {fmt(g['kappa'], '.3g')} | {fmt(g['ess'], '.0f')} | "
             f"{'PASS' if g['passed'] else 'FAIL'} |")
     lines.append("")
     for g in groups:
@@ -560,69 +566,6 @@ def run(args, settings: dict) -> str:
     if args.figure is not None:
         draw_figure(figure_data, args.figure)
     return text
-
-
-# ---- the figure
-
-# The 2-D marginals drawn per (scene, noise): translation x-y in mm, rotation pitch-yaw in deg.
-PANELS = (((0, 1), 1e3, "x error (mm)", "y error (mm)"),
-          ((4, 5), np.degrees(1.0), "pitch error (deg)", "yaw error (deg)"))
-CHI2_95_2DOF = 5.991  # the 95 % ellipse of a 2-D Gaussian
-
-
-def ellipse_xy(mean2, cov2, radius: float, n: int = 100) -> np.ndarray:
-    """(n, 2) points of the Mahalanobis-radius contour of a 2-D Gaussian (a semi-definite
-    covariance gives a flat ellipse)."""
-    vals, vecs = np.linalg.eigh(cov2)
-    t = np.linspace(0, 2 * np.pi, n)
-    circle = np.c_[np.cos(t), np.sin(t)] * (radius * np.sqrt(np.maximum(vals, 0)))
-    return np.asarray(mean2) + circle @ vecs.T
-
-
-def draw_figure(figure_data: dict, path: Path) -> None:
-    """Per (scene, noise): the actual errors of every valid trial of the first method (dots), the
-    95 % ellipse of each method's mean reported covariance around zero, and the first trial's
-    samples / particles (as errors). One row per (scene, noise): pick a few with --datasets and
-    --noise."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    names = list(figure_data)
-    fig, axes = plt.subplots(len(names), 2, figsize=(11, 4.2 * len(names)), squeeze=False)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for row, name in enumerate(names):
-        errors, mean_covs, first_samples = figure_data[name]
-        for col, (axes_idx, unit, xlabel, ylabel) in enumerate(PANELS):
-            ax = axes[row, col]
-            idx = list(axes_idx)
-            ax.scatter(errors[:, idx[0]] * unit, errors[:, idx[1]] * unit, s=10, c="0.35",
-                       label=f"actual errors ({len(errors)} trials)", zorder=3)
-            if len(errors):
-                actual = errors[:, idx].T @ errors[:, idx] / len(errors)
-                e = ellipse_xy(np.zeros(2), actual * unit**2, np.sqrt(CHI2_95_2DOF)).T
-                ax.plot(*e, c="k", lw=2.2, ls="--", label="95 % of the actual errors")
-            for k, m in enumerate(mean_covs):
-                c = colours[k % len(colours)]
-                e = ellipse_xy(np.zeros(2), mean_covs[m][np.ix_(idx, idx)] * unit**2,
-                               np.sqrt(CHI2_95_2DOF)).T
-                ax.plot(*e, c=c, lw=1.6, ls=":" if "naive" in m else "-",
-                        label=f"{m}: mean reported 95 %")
-                if first_samples and m in first_samples:
-                    smp = first_samples[m]
-                    ax.scatter(smp[:, idx[0]] * unit, smp[:, idx[1]] * unit, s=9, color=c,
-                               alpha=0.5, marker="x" if m.startswith("svgd") else ".",
-                               label=f"{m}: trial 0 samples")
-            ax.set(xlabel=xlabel, ylabel=ylabel, title=name)
-            ax.set_aspect("equal", adjustable="datalim")
-            ax.grid(alpha=0.3)
-        axes[row, 1].legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5))
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
-    print(f"wrote {path}")
 
 
 def parse_args(argv=None):

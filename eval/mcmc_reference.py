@@ -82,6 +82,7 @@ import sgd_icp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import calibrate_uncertainty as cal  # noqa: E402  (the problems of the calibration)
+import calibration_figure as calfig  # noqa: E402  (its ellipses)
 
 METHODS = ("laplace", "sgld", "svgd")
 NORMAL_NEIGHBORS = 10  # the library's kSurfaceNeighbors
@@ -587,14 +588,14 @@ def plot(figure_data: dict, path: Path) -> None:
                        edgecolor="k", linewidth=0.4, label="svgd particles")
             for pairing, mc in data["references"].items():
                 colour, style = reference_style[pairing]
-                xy = cal.ellipse_xy(mc["mean"][ix] * unit, mc["cov"][np.ix_(ix, ix)] * unit**2,
+                xy = calfig.ellipse_xy(mc["mean"][ix] * unit, mc["cov"][np.ix_(ix, ix)] * unit**2,
                                     2.0)
                 note = "" if mc["rhat"].max() < RHAT_MAX else ", not converged"
                 ax.plot(*xy.T, color=colour, ls=style, lw=2.2,
                         label=f"MCMC ({pairing} pairs{note}) 2-sigma")
             for m in METHODS:
                 mean, cov, _ = data["fits"][m]
-                xy = cal.ellipse_xy(mean[ix] * unit, cov[np.ix_(ix, ix)] * unit**2, 2.0)
+                xy = calfig.ellipse_xy(mean[ix] * unit, cov[np.ix_(ix, ix)] * unit**2, 2.0)
                 ax.plot(*xy.T, color=colours[m], ls="--", lw=1.6, label=f"{m} 2-sigma")
             ax.plot(0, 0, "+", color="red", ms=12, mew=2, label="estimate")
             ax.set(xlabel=xlabel, ylabel=ylabel, title=f"{name}: {title}")

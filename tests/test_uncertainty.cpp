@@ -306,6 +306,35 @@ TEST(Sgld, SampleCovarianceMatchesLaplaceAlongCorrelatedDirections) {
   EXPECT_LT(off_diagonal.norm(), 0.5) << whitened;
 }
 
+// The chain contracts every whitened axis by sgld_step = 0.1 per iteration, so its samples are
+// worth more independent draws the more iterations lie between them. On this box the slowest
+// coordinate's samples are worth 2 % of their number at thinning 1, 12 % at the default 5, 25 %
+// at 10 (an AR(1) chain correlated 0.9 per iteration would give 5, 26 and 48 %: the chain mixes
+// more slowly than its contraction alone says).
+TEST(Sgld, ReportsTheEffectiveSampleSizeOfItsChain) {
+  const PointCloud reference = box_surface(20000, 31);
+  const PointCloud source = noisy_source(reference, kTgt, kNoise_m, 32);
+  SgdSettings s = uncertainty_settings(UncertaintyType::sgld, false, CostType::point_to_plane);
+  s.uncertainty.samples = 400;
+  const auto ess_share = [&](std::size_t thinning) {
+    s.uncertainty.thinning = thinning;
+    const RegistrationResult r = align(source, reference, s);
+    EXPECT_TRUE(r.converged) << r.message;
+    return r.effective_samples / static_cast<double>(r.samples.size());
+  };
+  const double every = ess_share(1);
+  const double fifth = ess_share(5);
+  const double tenth = ess_share(10);
+  EXPECT_LT(every, 0.06);
+  EXPECT_GT(fifth, 0.06);
+  EXPECT_LT(fifth, 0.3);
+  EXPECT_GT(tenth, 1.5 * fifth);
+  EXPECT_GT(tenth, 5.0 * every);
+  // laplace samples nothing: nothing to report.
+  s.uncertainty.method = UncertaintyType::laplace;
+  EXPECT_EQ(align(source, reference, s).effective_samples, 0.0);
+}
+
 // The control variate's gradients at the optimum are paired once per point when the batch cost
 // is a sum over its points (no trimming); with trimming the batch is paired at the optimum
 // again. A trim ratio that keeps every pair of a batch of 160 takes the second path on the same

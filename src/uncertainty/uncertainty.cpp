@@ -18,6 +18,7 @@
 #include "sgdicp/solver/optimizer.hpp"
 #include "sgdicp/solver/sampler.hpp"
 #include "surfaces/point_surfaces.hpp"
+#include "uncertainty/effective_samples.hpp"
 #include "uncertainty/shrinkage.hpp"
 #include "uncertainty/stein.hpp"
 #include "util/stopwatch.hpp"
@@ -618,6 +619,14 @@ PoseVector estimate_uncertainty(const UncertaintyProblem& p, const UncertaintySe
     const Whitening white{theta_hat, Eigen::LLT<PoseMatrix>(post.precision)};
     if (s.method == UncertaintyType::sgld) {
       fill_from_samples(p, sgld_chain(p, s, post, white, at_hat), reported_hat, result);
+      result.effective_samples = detail::effective_sample_size(result.samples);
+      if (result.effective_samples < kFewEffectiveSamples) {
+        result.message += "; sgld: its " + std::to_string(result.samples.size()) +
+                          " samples are worth " +
+                          std::to_string(static_cast<int>(std::lround(result.effective_samples))) +
+                          " independent draws: the covariance's own sampling error is large "
+                          "(more uncertainty_samples, or laplace)";
+      }
     } else {
       fill_from_particles(p, svgd_particles(p, s, post, white, at_hat), white, reported_hat,
                           result);

@@ -104,6 +104,27 @@ def test_sgld_samples_are_reproducible_and_near_laplace(problem):
     assert np.all((ratio > 0.7) & (ratio < 1.4)), ratio
     c = sgd_icp.register(src, ref, uncertainty="sgld", seed=7, **kw)
     assert not np.array_equal(a.samples, c.samples)
+    # What the 400 samples are worth: the library's effective sample size against one computed
+    # here (numpy, Geyer's initial monotone sequence, the slowest coordinate).
+    assert a.effective_samples == pytest.approx(effective_sample_size(a.samples), rel=1e-6)
+    assert 0 < a.effective_samples < 400
+
+
+def effective_sample_size(chain):
+    n = len(chain)
+    ess = []
+    for x in chain.T:
+        d = x - x.mean()
+        acov = np.correlate(d, d, mode="full")[n - 1:] / n
+        tau, previous = -1.0, np.inf
+        for m in range(n // 2):
+            pair = (acov[2 * m] + acov[2 * m + 1]) / acov[0]
+            if pair <= 0:
+                break
+            previous = min(previous, pair)
+            tau += 2 * previous
+        ess.append(n / tau)
+    return min(ess)
 
 
 def test_settings_object_carries_the_uncertainty(problem):

@@ -103,6 +103,9 @@ struct RegistrationResult {
   double residual_sigma_m = 0.0;    ///< RMS of the scalar residuals at the optimum, metres
   double correlation_factor = 0.0;  ///< kappa: naive covariance too narrow by this factor
   double softening = 0.0;  ///< laplace: the fixed pairs' curvature softened by re-pairing, (0, 1]
+  /// sgld: what its samples are worth in independent draws, the smallest over the six
+  /// coordinates (Geyer's initial monotone sequence); 0 for the other methods.
+  double effective_samples = 0.0;
   std::size_t uncertainty_pairs = 0;  ///< pairs of the full-data pass at the optimum
   double uncertainty_ms = 0.0;        ///< wall time of the uncertainty (inside time_ms)
 
@@ -169,6 +172,11 @@ void for_each_result_field(F&& f) {
     "directions the data hold (1 = not at all; measured by a secant of the re-paired gradient, "
     "or given by the odometry from its recent frames); the covariance grows by its inverse "
     "square.");
+  f("effective_samples", &R::effective_samples,
+    "With sgld: the effective sample size of its chain, the smallest over the six coordinates "
+    "(Geyer's initial monotone sequence of autocorrelations): how many independent draws its "
+    "samples are worth, and so how precisely their covariance is known (0 for the other "
+    "methods).");
   f("uncertainty_pairs", &R::uncertainty_pairs,
     "With uncertainty: pairs of the full-data pass at the optimum.");
   f("uncertainty_ms", &R::uncertainty_ms,
