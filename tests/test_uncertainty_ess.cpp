@@ -32,14 +32,14 @@ double expected_ess(double r, std::size_t n) {
 }  // namespace
 
 TEST(EffectiveSamples, IndependentDrawsAreWorthThemselves) {
-  const std::size_t n = 20000;
+  const std::size_t n = 200000;
   const double ess = effective_sample_size(ar1(0.0, n, 1));
   EXPECT_GT(ess, 0.9 * n);
   EXPECT_LT(ess, 1.1 * n);
 }
 
 TEST(EffectiveSamples, AutoregressiveChainsAsTheirTheory) {
-  const std::size_t n = 20000;
+  const std::size_t n = 200000;
   for (const double r : {0.5, 0.9}) {
     const double ess = effective_sample_size(ar1(r, n, 2));
     EXPECT_GT(ess, 0.85 * expected_ess(r, n)) << "r = " << r;
@@ -49,7 +49,7 @@ TEST(EffectiveSamples, AutoregressiveChainsAsTheirTheory) {
 
 // A chain of poses is worth what its slowest coordinate is worth.
 TEST(EffectiveSamples, PoseChainTakesItsSlowestCoordinate) {
-  const std::size_t n = 20000;
+  const std::size_t n = 200000;
   std::vector<PoseVector> chain(n, PoseVector::Zero());
   for (int k = 0; k < 6; ++k) {
     const std::vector<double> x = ar1(k == 4 ? 0.9 : 0.0, n, 10 + static_cast<std::uint64_t>(k));
