@@ -1066,6 +1066,13 @@ class RegistrationResult:
         too narrow (block sandwich estimator); the likelihood is tempered by 1/kappa with temper.
         """
     @property
+    def effective_samples(self) -> float:
+        """With sgld: the effective sample size of its chain, the smallest over the six coordinates
+        (Geyer's initial monotone sequence of autocorrelations): how many independent draws its
+        samples are worth, and so how precisely their covariance is known (0 for the other
+        methods).
+        """
+    @property
     def softening(self) -> float:
         """With laplace: the factor by which re-pairing softens the fixed pairs' curvature along the
         directions the data hold (1 = not at all; measured by a secant of the re-paired gradient,
