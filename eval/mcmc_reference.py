@@ -54,7 +54,7 @@ i.e. its particles when there is one mode):
   mean offset                              Mahalanobis distance of the method's mean from the
                                            MCMC mean, in MCMC standard deviations
   sample ESS                               sgld: the effective sample size of its 200 samples
-                                           (one chain), the worst axis
+                                           (one chain), the worst axis (its effective_samples)
   KL floor                                 KL(MCMC || fit) of a fit to K exact independent draws
                                            of the MCMC Gaussian (K = the method's sample count):
                                            what a perfect sampler with K samples would score
@@ -448,10 +448,9 @@ def run_problem(name, trial, scene, args, rng):
 
     fits = {m: method_fit(m, results[m], theta_hat) for m in METHODS}
     # sgld's samples are one chain: its ESS says how many independent draws its fit rests on
-    # (svgd's particles are not a chain, laplace has none).
+    # (svgd's particles are not a chain, laplace has none); the library reports it.
     sample_ess = {m: float("nan") for m in METHODS}
-    sample_ess["sgld"] = float(effective_sample_size(
-        offsets_from(np.array(results["sgld"].samples), theta_hat)[None]).min())
+    sample_ess["sgld"] = results["sgld"].effective_samples
     rows, references = [], {}
     for pairing in args.pairings:
         energy = energies[pairing]
@@ -589,7 +588,7 @@ def plot(figure_data: dict, path: Path) -> None:
             for pairing, mc in data["references"].items():
                 colour, style = reference_style[pairing]
                 xy = calfig.ellipse_xy(mc["mean"][ix] * unit, mc["cov"][np.ix_(ix, ix)] * unit**2,
-                                    2.0)
+                                       2.0)
                 note = "" if mc["rhat"].max() < RHAT_MAX else ", not converged"
                 ax.plot(*xy.T, color=colour, ls=style, lw=2.2,
                         label=f"MCMC ({pairing} pairs{note}) 2-sigma")

@@ -84,10 +84,9 @@ void take_coarse_surfaces(const VoxelTable<Moments>& fine, const NeighborhoodSet
 }
 
 // The index over the grid's centroids with their block surfaces (coarse ones where its blocks
-// are scan lines). The tree over the centroids is built on
-// one thread while the other sorts the keys and starts the sweep: neither waits for the other
-// (sort, sweep and tree on two threads 6.1 -> 4.8-5.2 ms on a KITTI scan, 6.3 -> 5.1 ms on a
-// Kinect frame).
+// are scan lines). The tree over the centroids is built on one thread while the other sorts the
+// keys and starts the sweep: neither waits for the other (sort, sweep and tree on two threads
+// 6.1 -> 4.8-5.2 ms on a KITTI scan, 6.3 -> 5.1 ms on a Kinect frame).
 ReferenceIndex with_block_surfaces(const VoxelTable<Moments>& table, PointCloud centroids,
                                    double voxel_size_m, const NeighborhoodSettings& stored,
                                    const KdTreeSettings& tree) {
