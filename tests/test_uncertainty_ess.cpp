@@ -1,5 +1,6 @@
 // Tests of the effective sample size sgld reports (src/uncertainty/effective_samples.hpp) on
 // chains whose autocorrelation is known.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <random>
@@ -58,6 +59,43 @@ TEST(EffectiveSamples, PoseChainTakesItsSlowestCoordinate) {
   const double ess = effective_sample_size(chain);
   EXPECT_GT(ess, 0.85 * expected_ess(0.9, n));
   EXPECT_LT(ess, 1.15 * expected_ess(0.9, n));
+}
+
+// The autocovariances by FFT against the sum one lag at a time, on a short chain where every
+// lag is cheap: the same tau to rounding.
+TEST(EffectiveSamples, MatchesTheDirectSumOfAutocovariances) {
+  const std::vector<double> x = ar1(0.7, 500, 3);
+  const auto n = static_cast<double>(x.size());
+  double mean = 0.0;
+  for (const double v : x) mean += v / n;
+  const auto gamma = [&](std::size_t k) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i + k < x.size(); ++i) sum += (x[i] - mean) * (x[i + k] - mean);
+    return sum / n;
+  };
+  double tau = -1.0;
+  double previous = 1e300;
+  for (std::size_t m = 0; 2 * m + 1 < x.size(); ++m) {
+    const double pair = (gamma(2 * m) + gamma(2 * m + 1)) / gamma(0);
+    if (!(pair > 0.0)) break;
+    previous = std::min(previous, pair);
+    tau += 2.0 * previous;
+  }
+  EXPECT_NEAR(effective_sample_size(x), n / tau, 1e-9 * n / tau);
+}
+
+// A chain that never decorrelates (a random walk) at the largest sample count a run may ask
+// for: its pairs of autocorrelations stay positive to lag ~n/2, where the sum one lag at a time
+// took O(n^2) (hours); it is worth a handful of draws.
+TEST(EffectiveSamples, RandomWalkOfAMillionSamplesIsWorthFewDraws) {
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<double> x(1000000);
+  double v = 0.0;
+  for (double& xi : x) xi = (v += normal(rng));
+  const double ess = effective_sample_size(x);
+  EXPECT_GT(ess, 0.0);
+  EXPECT_LT(ess, 100.0);
 }
 
 TEST(EffectiveSamples, TooShortOrStillChainsAreWorthNothing) {
