@@ -1,8 +1,9 @@
-// Tests of the grid bootstrap's shrunk covariance (src/uncertainty/shrinkage.hpp) on draws of a
-// known 6-D Gaussian, against the covariance that generated them.
+// Tests of the grid bootstrap's shrunk covariance and its stopping rule (src/uncertainty/
+// shrinkage.hpp) on draws of a known 6-D Gaussian, against the covariance that generated them.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <optional>
 #include <random>
 #include <utility>
 #include <vector>
@@ -12,6 +13,7 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 
+#include "sgdicp/uncertainty/uncertainty.hpp"
 #include "uncertainty/shrinkage.hpp"
 
 namespace sgdicp::detail {
@@ -128,6 +130,54 @@ TEST(GridShrinkage, ManyDrawsLeaveTheSampleCovariance) {
   const PoseMatrix c = whitened(shrunk_covariance(draws, f.shape));
   EXPECT_LT((c - s).norm(), 0.05 * s.norm());
   EXPECT_LT((c - PoseMatrix::Identity()).norm(), 0.15);
+}
+
+// The grid bootstrap asks for every shifted grid where the grids' share is of the sandwich's
+// order, and stops after kGridProbeOffsets where it is a small fraction of it in both blocks;
+// a share small in one block only is not negligible. Grids are drawn in order, and what the
+// bootstrap returns is the shrunk covariance of the draws it asked for, the actual grid's 0
+// among them.
+TEST(GridShare, StopsEarlyOnlyWhereTheShareIsNegligibleInBothBlocks) {
+  std::mt19937_64 rng(62);
+  const Fixture f = fixture(rng);
+  const auto run = [&](const PoseMatrix& grids_covariance) {
+    const std::vector<PoseVector> draws = draws_of(grids_covariance, kGridOffsets, rng);
+    std::vector<PoseVector> asked{PoseVector::Zero()};
+    const GridShare share = grid_share(
+        [&](int grid) -> std::optional<PoseVector> {
+          EXPECT_EQ(grid, static_cast<int>(asked.size()) - 1);
+          asked.push_back(draws[static_cast<std::size_t>(grid)]);
+          return asked.back();
+        },
+        f.truth);
+    EXPECT_EQ(share.grids, static_cast<int>(asked.size()) - 1);
+    EXPECT_TRUE(share.covariance.isApprox(shrunk_covariance(asked, f.truth)));
+    return share.grids;
+  };
+  EXPECT_EQ(run(f.truth), kGridOffsets);
+  EXPECT_EQ(run(0.003 * f.truth), kGridProbeOffsets);
+  // Negligible in translation, as large as the sandwich in rotation: every grid.
+  PoseVector blocks;
+  blocks << 0.05, 0.05, 0.05, 1.0, 1.0, 1.0;
+  EXPECT_EQ(run(blocks.asDiagonal() * f.truth * blocks.asDiagonal()), kGridOffsets);
+}
+
+// A grid whose optimum is not finite is left out of the draws, and the others still count.
+TEST(GridShare, LeavesOutGridsWithoutAFiniteOptimum) {
+  std::mt19937_64 rng(65);
+  const Fixture f = fixture(rng);
+  const std::vector<PoseVector> draws = draws_of(f.truth, kGridOffsets, rng);
+  std::vector<PoseVector> kept{PoseVector::Zero()};
+  const GridShare share = grid_share(
+      [&](int grid) -> std::optional<PoseVector> {
+        if (grid == 1) return std::nullopt;
+        kept.push_back(draws[static_cast<std::size_t>(grid)]);
+        return kept.back();
+      },
+      f.truth);
+  EXPECT_EQ(share.grids, kGridOffsets);
+  EXPECT_EQ(kept.size(), static_cast<std::size_t>(kGridOffsets));
+  EXPECT_TRUE(share.covariance.isApprox(shrunk_covariance(kept, f.truth)));
 }
 
 TEST(GridShrinkage, DegenerateInputs) {

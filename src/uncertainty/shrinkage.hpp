@@ -1,6 +1,8 @@
 #pragma once
 // The covariance of a handful of pose draws, shrunk toward a known shape (private to the
 // library): laplace's grid bootstrap (uncertainty.cpp) has kGridOffsets + 1 = 7 draws in 6-D.
+#include <functional>
+#include <optional>
 #include <vector>
 
 #include "sgdicp/core/pose.hpp"
@@ -18,5 +20,19 @@ namespace sgdicp::detail {
 /// positive definite; zero for fewer than 2 draws.
 [[nodiscard]] PoseMatrix shrunk_covariance(const std::vector<PoseVector>& draws,
                                            const PoseMatrix& shape);
+
+/// The grid's share of the pose's variance (laplace's grid bootstrap): the shrunk covariance of
+/// the actual grid's optimum (0) and of `optimum_on_grid(k)`, the optima of the source thinned on
+/// shifted grids k = 0, 1, ... (nullopt: not finite, left out), toward `sandwich`, the rest of
+/// the covariance. It asks for kGridOffsets grids, and stops after kGridProbeOffsets of them
+/// when their covariance is below kGridShareNegligible of the sandwich's variance in both
+/// blocks (translation, rotation). `grids`: how many it asked for.
+struct GridShare {
+  PoseMatrix covariance = PoseMatrix::Zero();
+  int grids = 0;
+};
+[[nodiscard]] GridShare grid_share(
+    const std::function<std::optional<PoseVector>(int grid)>& optimum_on_grid,
+    const PoseMatrix& sandwich);
 
 }  // namespace sgdicp::detail

@@ -328,7 +328,8 @@ PointCloud thinned_on_shifted_grid(const UncertaintyProblem& p, const Eigen::Vec
 // (the actual grid's among them) is the grid's share of the error. Seven draws in 6-D give a
 // covariance whose inverse has no finite mean (the 7-Scenes frame at 3 cm: mean NEES 29, median
 // 11), so it is shrunk toward the sandwich's shape `shape` (docs/design.md, *The grid's share,
-// shrunk*).
+// shrunk*). Where the first grids put the share below a fraction of the sandwich, the rest are
+// skipped (detail::grid_share).
 PoseMatrix grid_covariance(const UncertaintyProblem& p, const PoseVector& theta,
                            const PoseMatrix& a_inverse, const PoseMatrix& shape) {
   if (p.unthinned_source == nullptr || !(p.voxel_m > 0.0) || !p.cloud_gradient) {
@@ -336,13 +337,13 @@ PoseMatrix grid_covariance(const UncertaintyProblem& p, const PoseVector& theta,
   }
   std::mt19937_64 engine(p.seed ^ 0x5851f42d4c957f2dULL);
   const auto uniform = [&engine] { return static_cast<double>(engine() >> 11) * 0x1.0p-53; };
-  std::vector<PoseVector> optima{PoseVector::Zero()};
-  for (int k = 0; k < kGridOffsets; ++k) {
+  const auto optimum_on_grid = [&](int) -> std::optional<PoseVector> {
     const Eigen::Vector3d offset = p.voxel_m * Eigen::Vector3d(uniform(), uniform(), uniform());
     const PoseVector g = p.cloud_gradient(thinned_on_shifted_grid(p, offset), theta);
-    if (g.allFinite()) optima.push_back(-(a_inverse * g));
-  }
-  return detail::shrunk_covariance(optima, shape);
+    if (!g.allFinite()) return std::nullopt;
+    return PoseVector(-(a_inverse * g));
+  };
+  return detail::grid_share(optimum_on_grid, shape).covariance;
 }
 
 // Normal deviates from a fully specified engine and Box-Muller, so that a seed gives the same
