@@ -162,10 +162,19 @@ TEST(GridShare, StopsEarlyOnlyWhereTheShareIsNegligibleInBothBlocks) {
   EXPECT_EQ(run(blocks.asDiagonal() * f.truth * blocks.asDiagonal()), kGridOffsets);
 }
 
-// A grid whose optimum is not finite is left out of the draws, and the others still count.
+// A grid whose optimum is not finite is left out of the draws, and the others still count; a
+// probe short of a grid does not stop the bootstrap, however small the draw it has.
 TEST(GridShare, LeavesOutGridsWithoutAFiniteOptimum) {
   std::mt19937_64 rng(65);
   const Fixture f = fixture(rng);
+  const std::vector<PoseVector> small = draws_of(0.003 * f.truth, kGridOffsets, rng);
+  const GridShare probe_short = grid_share(
+      [&](int grid) -> std::optional<PoseVector> {
+        if (grid == 0) return std::nullopt;
+        return small[static_cast<std::size_t>(grid)];
+      },
+      f.truth);
+  EXPECT_EQ(probe_short.grids, kGridOffsets);
   const std::vector<PoseVector> draws = draws_of(f.truth, kGridOffsets, rng);
   std::vector<PoseVector> kept{PoseVector::Zero()};
   const GridShare share = grid_share(

@@ -81,7 +81,9 @@ GridShare grid_share(const std::function<std::optional<PoseVector>(int grid)>& o
   std::vector<PoseVector> optima{PoseVector::Zero()};
   GridShare share;
   for (; share.grids < kGridOffsets; ++share.grids) {
-    if (share.grids == kGridProbeOffsets) {
+    // Only from a full probe: fewer draws (a grid without a finite optimum) say too little.
+    if (share.grids == kGridProbeOffsets &&
+        optima.size() == static_cast<std::size_t>(kGridProbeOffsets) + 1) {
       share.covariance = shrunk_covariance(optima, sandwich);
       if (negligible_beside(share.covariance, sandwich)) return share;
     }

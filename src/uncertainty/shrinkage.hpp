@@ -25,8 +25,8 @@ namespace sgdicp::detail {
 /// the actual grid's optimum (0) and of `optimum_on_grid(k)`, the optima of the source thinned on
 /// shifted grids k = 0, 1, ... (nullopt: not finite, left out), toward `sandwich`, the rest of
 /// the covariance. It asks for kGridOffsets grids, and stops after kGridProbeOffsets of them
-/// when their covariance is below kGridShareNegligible of the sandwich's variance in both
-/// blocks (translation, rotation). `grids`: how many it asked for.
+/// when each gave an optimum and their covariance is below kGridShareNegligible of the sandwich's
+/// variance in both blocks (translation, rotation). `grids`: how many it asked for.
 struct GridShare {
   PoseMatrix covariance = PoseMatrix::Zero();
   int grids = 0;
