@@ -17,24 +17,25 @@ PoseMatrix sample_covariance(const std::vector<PoseVector>& deviations) {
   return s / static_cast<double>(deviations.size() - 1);
 }
 
+// The traces of the translation and of the rotation block of `m`.
+Eigen::Array2d block_traces(const PoseMatrix& m) {
+  return {m.topLeftCorner<3, 3>().trace(), m.bottomRightCorner<3, 3>().trace()};
+}
+
 // `m` with its translation and rotation blocks scaled to the traces of `like`'s.
 PoseMatrix with_block_traces_of(const PoseMatrix& m, const PoseMatrix& like) {
-  const auto factor = [](double want, double have) {
-    return have > 0.0 ? std::sqrt(want / have) : 0.0;
-  };
+  const Eigen::Array2d want = block_traces(like);
+  const Eigen::Array2d have = block_traces(m);
+  const Eigen::Array2d factor = (have > 0.0).select((want / have).sqrt(), 0.0);
   PoseVector d;
-  d.head<3>().setConstant(
-      factor(like.topLeftCorner<3, 3>().trace(), m.topLeftCorner<3, 3>().trace()));
-  d.tail<3>().setConstant(
-      factor(like.bottomRightCorner<3, 3>().trace(), m.bottomRightCorner<3, 3>().trace()));
+  d.head<3>().setConstant(factor[0]);
+  d.tail<3>().setConstant(factor[1]);
   return d.asDiagonal() * m * d.asDiagonal();
 }
 
 // Whether `grid` is below kGridShareNegligible of `sandwich` in the traces of both blocks.
 bool negligible_beside(const PoseMatrix& grid, const PoseMatrix& sandwich) {
-  const auto below = [](double share, double of) { return share < kGridShareNegligible * of; };
-  return below(grid.topLeftCorner<3, 3>().trace(), sandwich.topLeftCorner<3, 3>().trace()) &&
-         below(grid.bottomRightCorner<3, 3>().trace(), sandwich.bottomRightCorner<3, 3>().trace());
+  return (block_traces(grid) < kGridShareNegligible * block_traces(sandwich)).all();
 }
 
 }  // namespace
