@@ -189,6 +189,29 @@ TEST(GridShare, LeavesOutGridsWithoutAFiniteOptimum) {
   EXPECT_TRUE(share.covariance.isApprox(shrunk_covariance(kept, f.truth)));
 }
 
+// Three draws know a block's trace to within ~3x: a probe showing a fifth of the sandwich may
+// hide a share as large as the sandwich (at a coarse voxel on a depth frame, 0.16 / 0.12 in the
+// probe and 0.57 / 0.93 over 30 grids), so it takes every grid; a tenth stops. The probe's draws
+// are 0, d and -d, whose sample covariance is d d^T: its block traces are exactly |d_t|^2, |d_r|^2.
+TEST(GridShare, KeepsDrawingWhereTheProbeIsWithinItsSamplingErrorOfTheSandwich) {
+  std::mt19937_64 rng(66);
+  const Fixture f = fixture(rng);
+  const auto grids_for = [&](double share) {
+    PoseVector d = PoseVector::Zero();
+    d(0) = std::sqrt(share * f.truth.topLeftCorner<3, 3>().trace());
+    d(3) = std::sqrt(share * f.truth.bottomRightCorner<3, 3>().trace());
+    const std::vector<PoseVector> probe{d, -d};
+    return grid_share(
+               [&](int grid) -> std::optional<PoseVector> {
+                 return grid < kGridProbeOffsets ? probe[static_cast<std::size_t>(grid)] : d;
+               },
+               f.truth)
+        .grids;
+  };
+  EXPECT_EQ(grids_for(0.2), kGridOffsets);
+  EXPECT_EQ(grids_for(0.1), kGridProbeOffsets);
+}
+
 TEST(GridShrinkage, DegenerateInputs) {
   EXPECT_TRUE(shrunk_covariance({}, PoseMatrix::Identity()).isZero());
   EXPECT_TRUE(shrunk_covariance({PoseVector::Ones()}, PoseMatrix::Identity()).isZero());

@@ -75,8 +75,9 @@ PoseMatrix shrunk_covariance(const std::vector<PoseVector>& draws, const PoseMat
 // Each grid costs a thinning of the raw source and a fresh search of every centroid, 2/3 of
 // laplace's time. Where the first grids' share is a fraction of the sandwich (the sparse LiDAR
 // scans: 4-19 % of the variance), what the rest could add moves the total by a fraction of that;
-// where it dominates (dense depth frames: 0.8-5x the sandwich) every grid is needed (docs/
-// design.md, *A negligible grid share stops the bootstrap*).
+// where it dominates (dense depth frames: 0.8-5x the sandwich) every grid is needed. Three draws
+// know the share to ~3x, so the threshold leaves that margin (docs/design.md, *A negligible grid
+// share stops the bootstrap*).
 GridShare grid_share(const std::function<std::optional<PoseVector>(int grid)>& optimum_on_grid,
                      const PoseMatrix& sandwich) {
   std::vector<PoseVector> optima{PoseVector::Zero()};
