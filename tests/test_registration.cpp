@@ -658,6 +658,26 @@ TEST(Threads, TwoThreadsRegisterBitIdenticallyToOne) {
   }
 }
 
+// laplace on a thinned source: its grid bootstrap searches every centroid of each shifted grid
+// afresh, in two halves summed apart (on the helper with two threads) and added in order: the
+// same covariance to the bit (and clean under ThreadSanitizer).
+TEST(Threads, TwoThreadsGiveLaplacesCovarianceBitIdentically) {
+  const Eigen::Matrix4d T_gt = make_transform(3 * kDeg, -2 * kDeg, 5 * kDeg, {0.1, -0.05, 0.02});
+  const PointCloud reference = synthetic_scene(65, 34000);
+  const PointCloud source = transformed(synthetic_scene(66, 34000), T_gt.inverse());
+  SgdSettings one;
+  one.uncertainty.method = UncertaintyType::laplace;
+  SgdSettings two = one;
+  two.num_threads = 2;
+  const RegistrationResult a = align(source, reference, one);
+  const RegistrationResult b = align(source, reference, two);
+  ASSERT_TRUE(a.converged) << a.message;
+  EXPECT_GT(a.voxel_size_m, 0.0) << "the grid bootstrap needs a thinned source";
+  EXPECT_GT(a.covariance.trace(), 0.0);
+  EXPECT_EQ(a.T_reference_source, b.T_reference_source);
+  EXPECT_EQ(a.covariance, b.covariance);
+}
+
 // A small source is drawn many times, so from its second pass on its queries go through the
 // run's memory (src/index/nearest_memory.hpp): looked up in both halves of a batch, new entries
 // written after them. Still the same bits as one thread (and clean under ThreadSanitizer, which
