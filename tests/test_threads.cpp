@@ -1,5 +1,7 @@
 // Registration on two threads: the same bits as on one (and clean under ThreadSanitizer, which
 // runs the Threads tests: scripts/sanitize.sh).
+#include <utility>
+
 #include <gtest/gtest.h>
 
 #include "sgdicp/index/nearest_neighbor.hpp"
@@ -12,6 +14,15 @@ namespace {
 using test::kDeg;
 using test::make_transform;
 using test::synthetic_scene;
+
+// The registrations of `source` to `reference` with `settings` on one thread and on two.
+std::pair<RegistrationResult, RegistrationResult> on_one_and_two_threads(
+    const PointCloud& source, const PointCloud& reference, SgdSettings settings) {
+  settings.num_threads = 1;
+  RegistrationResult one = align(source, reference, settings);
+  settings.num_threads = 2;
+  return {std::move(one), align(source, reference, settings)};
+}
 
 // The final statistics' inlier queries in two halves on two threads, in blocks of 4,096 samples:
 // the same inliers, RMSE and constraint ratio as on one thread, and the count a direct query of
@@ -47,11 +58,8 @@ TEST(Threads, TwoThreadsRegisterBitIdenticallyToOne) {
   const Eigen::Matrix4d T_gt = make_transform(4 * kDeg, -3 * kDeg, 12 * kDeg, {0.2, -0.1, 0.05});
   const PointCloud reference = synthetic_scene(61, 34000);
   const PointCloud source = transformed(synthetic_scene(62, 34000), T_gt.inverse());
-  for (SgdSettings one : {SgdSettings{}, SgdSettings::paper(OptimizerType::adam)}) {
-    SgdSettings two = one;
-    two.num_threads = 2;
-    const RegistrationResult a = align(source, reference, one);
-    const RegistrationResult b = align(source, reference, two);
+  for (const SgdSettings& settings : {SgdSettings{}, SgdSettings::paper(OptimizerType::adam)}) {
+    const auto [a, b] = on_one_and_two_threads(source, reference, settings);
     EXPECT_TRUE(a.converged) << a.message;
     EXPECT_EQ(a.T_reference_source, b.T_reference_source);
     EXPECT_EQ(a.iterations, b.iterations);
@@ -67,12 +75,9 @@ TEST(Threads, TwoThreadsGiveLaplacesCovarianceBitIdentically) {
   const Eigen::Matrix4d T_gt = make_transform(3 * kDeg, -2 * kDeg, 5 * kDeg, {0.1, -0.05, 0.02});
   const PointCloud reference = synthetic_scene(65, 34000);
   const PointCloud source = transformed(synthetic_scene(66, 34000), T_gt.inverse());
-  SgdSettings one;
-  one.uncertainty.method = UncertaintyType::laplace;
-  SgdSettings two = one;
-  two.num_threads = 2;
-  const RegistrationResult a = align(source, reference, one);
-  const RegistrationResult b = align(source, reference, two);
+  SgdSettings settings;
+  settings.uncertainty.method = UncertaintyType::laplace;
+  const auto [a, b] = on_one_and_two_threads(source, reference, settings);
   ASSERT_TRUE(a.converged) << a.message;
   EXPECT_GT(a.voxel_size_m, 0.0) << "the grid bootstrap needs a thinned source";
   EXPECT_GT(a.covariance.trace(), 0.0);
@@ -88,11 +93,7 @@ TEST(Threads, SmallSourceDrawnManyTimesRegistersBitIdenticallyOnTwoThreads) {
   const Eigen::Matrix4d T_gt = make_transform(6 * kDeg, -4 * kDeg, 9 * kDeg, {0.05, -0.03, 0.02});
   const PointCloud reference = synthetic_scene(63, 700);
   const PointCloud source = transformed(synthetic_scene(64, 600), T_gt.inverse());
-  SgdSettings one;
-  SgdSettings two = one;
-  two.num_threads = 2;
-  const RegistrationResult a = align(source, reference, one);
-  const RegistrationResult b = align(source, reference, two);
+  const auto [a, b] = on_one_and_two_threads(source, reference, SgdSettings{});
   EXPECT_TRUE(a.converged) << a.message;
   EXPECT_GT(a.points_processed, 3 * source.size()) << "the memory starts with the second pass";
   EXPECT_GE(a.points_processed, a.iterations * 32) << "batches of >= 32 are split";
